@@ -1,0 +1,48 @@
+// Disparity and depth maps on disk: KITTI uint16 PNG (value * 256, 0 = invalid)
+// and monodepth-style .npy stacks (float32 N x H x W, disparity / image width).
+#pragma once
+
+#include <memory>
+#include <opencv2/core.hpp>
+#include <string>
+
+namespace dvso {
+
+// Reads a KITTI uint16 PNG into CV_32F; invalid pixels (0) become 0. Throws
+// dvso::Error naming the file if it is missing, unreadable or not 16-bit.
+cv::Mat ReadKittiMapPng(const std::string& path);
+
+// Writes a CV_32F map as KITTI uint16 PNG (round(value * 256), clamped to
+// 1..65535 for positive values; <= 0 or non-finite = 0 = invalid). Atomic.
+void WriteKittiMapPng(const std::string& path, const cv::Mat& map);
+
+// Memory-mapped float32 .npy stack of shape (N, H, W) holding disparities
+// normalised by image width (monodepth / unofficial DVSO convention).
+class NpyDisparityStack {
+ public:
+  explicit NpyDisparityStack(const std::string& path);
+  ~NpyDisparityStack();
+  NpyDisparityStack(const NpyDisparityStack&) = delete;
+  NpyDisparityStack& operator=(const NpyDisparityStack&) = delete;
+
+  int size() const { return count_; }
+  int height() const { return height_; }
+  int width() const { return width_; }
+  // Frame i as CV_32F in pixels of an image `image_width` wide (value * image_width),
+  // resized to image_width x image_height when those differ from the stack's size.
+  // Throws dvso::Error on an out-of-range index or a NaN/Inf value.
+  cv::Mat Frame(int index, int image_width, int image_height) const;
+
+ private:
+  std::string path_;
+  int count_ = 0, height_ = 0, width_ = 0;
+  size_t data_offset_ = 0;
+  size_t mapped_size_ = 0;
+  void* mapped_ = nullptr;
+};
+
+// Writes a float32 (N, H, W) .npy file from N CV_32F maps of equal size
+// (values written as given). Used by tests and by `dvso predict --npy`.
+void WriteNpyStack(const std::string& path, const std::vector<cv::Mat>& maps);
+
+}  // namespace dvso

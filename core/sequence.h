@@ -1,0 +1,67 @@
+// Streaming readers for rectified stereo (or monocular) image sequences. A
+// reader never holds the whole sequence in memory: Read(i) loads frame i.
+//
+// Layouts:
+//  - KITTI odometry: image_0/ image_1/ (grey), image_2/ image_3/ (colour,
+//    optional), calib.txt (P0..P3), times.txt; frame i = %06d.png. Our
+//    simulator writes this layout too (plus poses.txt, depth_0/, disp_0/, disp_1/).
+//  - EuRoC/ASL: mav0/cam{0,1}/data.csv + sensor.yaml; rectified on read.
+//  - Monocular folder: images (sorted by name) + a DSO-style camera file.
+#pragma once
+
+#include <memory>
+#include <opencv2/core.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/camera.h"
+
+namespace dvso {
+
+struct StereoFrame {
+  int index = 0;          // 0-based position in the sequence
+  double timestamp = 0;   // seconds
+  cv::Mat left;           // CV_8UC1, rectified
+  cv::Mat right;          // CV_8UC1, rectified; empty for monocular sequences
+  cv::Mat left_color;     // CV_8UC3 (BGR) when the sequence has colour, else empty
+  cv::Mat right_color;    // CV_8UC3 (BGR) when the sequence has colour, else empty
+};
+
+struct SequenceReadOptions {
+  bool load_right = true;   // load the right image (stereo); off for monocular use
+  bool load_color = false;  // also load colour images when present
+};
+
+class SequenceReader {
+ public:
+  virtual ~SequenceReader() = default;
+  virtual int size() const = 0;
+  virtual bool is_stereo() const = 0;
+  virtual bool has_color() const = 0;
+  // Rectified intrinsics (and baseline for stereo; 0 for monocular).
+  virtual const StereoCamera& camera() const = 0;
+  // Timestamps of all frames (seconds), size() entries.
+  virtual const std::vector<double>& timestamps() const = 0;
+  // Loads frame i; throws dvso::Error naming the file on any problem
+  // (missing/unreadable image, size different from the calibration).
+  virtual StereoFrame Read(int index, const SequenceReadOptions& options = {}) const = 0;
+  // Directory the sequence was opened from.
+  virtual const std::string& root() const = 0;
+};
+
+// Opens a sequence, detecting the layout: KITTI (calib.txt), EuRoC (mav0/ or
+// cam0/data.csv), or a monocular folder (needs camera_file). Throws dvso::Error.
+std::unique_ptr<SequenceReader> OpenSequence(const std::string& path,
+                                             const std::string& camera_file = "");
+
+std::unique_ptr<SequenceReader> OpenKittiSequence(const std::string& path);
+std::unique_ptr<SequenceReader> OpenEurocSequence(const std::string& path);
+std::unique_ptr<SequenceReader> OpenImageFolder(const std::string& path, const std::string& camera_file);
+
+// Parses a KITTI calib.txt: P0 gives the intrinsics, P1 the baseline
+// (baseline = -P1[0][3] / P1[0][0]). Image size is taken from image_0/000000.png by the caller.
+StereoCamera ReadKittiCalibration(const std::string& calib_path, int width, int height);
+void WriteKittiCalibration(const std::string& calib_path, const StereoCamera& camera);
+
+}  // namespace dvso

@@ -1,0 +1,136 @@
+#include "core/trajectory.h"
+
+#include <cmath>
+#include <fstream>
+#include <iomanip>
+#include <sstream>
+
+#include "core/error.h"
+#include "core/fs_util.h"
+#include "core/lie.h"
+
+namespace dvso {
+
+double Trajectory::PathLength() const {
+  double length = 0.0;
+  for (size_t i = 1; i < poses.size(); ++i) {
+    length += (poses[i].T_world_camera.translation() - poses[i - 1].T_world_camera.translation()).norm();
+  }
+  return length;
+}
+
+namespace {
+
+bool ParseLine(const std::string& line, std::vector<double>* values) {
+  values->clear();
+  std::istringstream in(line);
+  std::string token;
+  while (in >> token) {
+    char* end = nullptr;
+    const double v = std::strtod(token.c_str(), &end);
+    if (end == token.c_str() || *end != '\0' || !std::isfinite(v)) return false;
+    values->push_back(v);
+  }
+  return true;
+}
+
+bool IsBlankOrComment(const std::string& line) {
+  const auto first = line.find_first_not_of(" \t\r");
+  return first == std::string::npos || line[first] == '#';
+}
+
+}  // namespace
+
+Trajectory ReadTrajectory(const std::string& path, TrajectoryFormat format,
+                          const std::vector<double>* times) {
+  std::ifstream in(path);
+  RequireFile(in.good(), path, "cannot open trajectory file");
+  Trajectory trajectory;
+  std::string line;
+  std::vector<double> v;
+  int line_number = 0;
+  while (std::getline(in, line)) {
+    ++line_number;
+    if (IsBlankOrComment(line)) continue;
+    const std::string where = "line " + std::to_string(line_number);
+    RequireFile(ParseLine(line, &v), path, where + ": not a list of finite numbers");
+    if (format == TrajectoryFormat::kAuto) {
+      RequireFile(v.size() == 12 || v.size() == 8, path,
+                  where + ": expected 12 (KITTI) or 8 (TUM) numbers, got " + std::to_string(v.size()));
+      format = v.size() == 12 ? TrajectoryFormat::kKitti : TrajectoryFormat::kTum;
+    }
+    StampedPose pose;
+    if (format == TrajectoryFormat::kKitti) {
+      RequireFile(v.size() == 12, path, where + ": KITTI pose needs 12 numbers");
+      pose.T_world_camera = IsometryFromRowMajor3x4(v.data());
+      pose.timestamp = static_cast<double>(trajectory.poses.size());
+    } else {
+      RequireFile(v.size() == 8, path, where + ": TUM pose needs 8 numbers");
+      Eigen::Quaterniond q(v[7], v[4], v[5], v[6]);
+      RequireFile(q.norm() > 1e-6, path, where + ": zero quaternion");
+      q.normalize();
+      pose.timestamp = v[0];
+      pose.T_world_camera.linear() = q.toRotationMatrix();
+      pose.T_world_camera.translation() = Eigen::Vector3d(v[1], v[2], v[3]);
+    }
+    trajectory.poses.push_back(pose);
+  }
+  RequireFile(!trajectory.empty(), path, "trajectory file holds no poses");
+  if (times != nullptr && format == TrajectoryFormat::kKitti) {
+    RequireFile(times->size() == trajectory.size(), path,
+                "times file has " + std::to_string(times->size()) + " entries for " +
+                    std::to_string(trajectory.size()) + " poses");
+    for (size_t i = 0; i < trajectory.size(); ++i) trajectory.poses[i].timestamp = (*times)[i];
+  }
+  return trajectory;
+}
+
+void WriteKittiTrajectory(const std::string& path, const Trajectory& trajectory) {
+  WriteAtomically(path, [&](const std::string& temp) {
+    std::ofstream out(temp);
+    RequireFile(out.good(), path, "cannot write trajectory");
+    out << std::setprecision(12);
+    for (const auto& p : trajectory.poses) {
+      const Eigen::Matrix3d R = p.T_world_camera.linear();
+      const Eigen::Vector3d t = p.T_world_camera.translation();
+      for (int r = 0; r < 3; ++r) {
+        out << R(r, 0) << ' ' << R(r, 1) << ' ' << R(r, 2) << ' ' << t(r) << (r < 2 ? ' ' : '\n');
+      }
+    }
+    RequireFile(out.good(), path, "error while writing trajectory");
+  });
+}
+
+void WriteTumTrajectory(const std::string& path, const Trajectory& trajectory) {
+  WriteAtomically(path, [&](const std::string& temp) {
+    std::ofstream out(temp);
+    RequireFile(out.good(), path, "cannot write trajectory");
+    out << std::setprecision(12);
+    for (const auto& p : trajectory.poses) {
+      const Eigen::Quaterniond q(p.T_world_camera.linear());
+      const Eigen::Vector3d t = p.T_world_camera.translation();
+      out << p.timestamp << ' ' << t.x() << ' ' << t.y() << ' ' << t.z() << ' ' << q.x() << ' '
+          << q.y() << ' ' << q.z() << ' ' << q.w() << '\n';
+    }
+    RequireFile(out.good(), path, "error while writing trajectory");
+  });
+}
+
+std::vector<double> ReadTimes(const std::string& path) {
+  std::ifstream in(path);
+  RequireFile(in.good(), path, "cannot open times file");
+  std::vector<double> times;
+  std::string line;
+  int line_number = 0;
+  std::vector<double> v;
+  while (std::getline(in, line)) {
+    ++line_number;
+    if (IsBlankOrComment(line)) continue;
+    RequireFile(ParseLine(line, &v) && v.size() == 1, path,
+                "line " + std::to_string(line_number) + ": expected one timestamp");
+    times.push_back(v[0]);
+  }
+  return times;
+}
+
+}  // namespace dvso

@@ -1,0 +1,23 @@
+// Registration functions of the `dvso` subcommands, one per file in pipelines/.
+// Each adds its subcommand to the app with a callback doing the work; errors
+// are thrown as dvso::Error and turned into one line + exit code 1 by main().
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+namespace dvso::cli {
+
+void AddDemoCommand(CLI::App& app);          // cmd_demo.cpp
+void AddSimulateCommand(CLI::App& app);      // cmd_simulate.cpp
+void AddEvalOdometryCommand(CLI::App& app);  // cmd_eval_odometry.cpp
+void AddEvalDepthCommand(CLI::App& app);     // cmd_eval_depth.cpp
+void AddOdometryCommand(CLI::App& app);      // cmd_odometry.cpp
+void AddLabelsCommand(CLI::App& app);        // cmd_labels.cpp
+#ifdef DVSO_WITH_TORCH
+void AddTrainCommand(CLI::App& app);    // torch_cmd_train.cpp
+void AddExportCommand(CLI::App& app);   // torch_cmd_export.cpp
+void AddPredictCommand(CLI::App& app);  // torch_cmd_predict.cpp
+void AddBenchCommand(CLI::App& app);    // torch_cmd_bench.cpp
+#endif
+
+}  // namespace dvso::cli
