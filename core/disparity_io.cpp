@@ -1,0 +1,175 @@
+#include "core/disparity_io.h"
+
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "core/error.h"
+#include "core/fs_util.h"
+
+namespace dvso {
+
+cv::Mat ReadKittiMapPng(const std::string& path) {
+  RequireFile(std::filesystem::is_regular_file(path), path, "map file does not exist");
+  const cv::Mat raw = cv::imread(path, cv::IMREAD_ANYDEPTH | cv::IMREAD_GRAYSCALE);
+  RequireFile(!raw.empty(), path, "cannot decode PNG");
+  RequireFile(raw.depth() == CV_16U && raw.channels() == 1, path,
+              "expected a single-channel uint16 PNG (KITTI map convention)");
+  cv::Mat map;
+  raw.convertTo(map, CV_32F, 1.0 / 256.0);
+  return map;
+}
+
+void WriteKittiMapPng(const std::string& path, const cv::Mat& map) {
+  Require(map.type() == CV_32FC1, "WriteKittiMapPng expects a CV_32FC1 map (" + path + ")");
+  cv::Mat out(map.size(), CV_16UC1);
+  for (int y = 0; y < map.rows; ++y) {
+    const float* src = map.ptr<float>(y);
+    uint16_t* dst = out.ptr<uint16_t>(y);
+    for (int x = 0; x < map.cols; ++x) {
+      const float v = src[x];
+      if (!std::isfinite(v) || v <= 0.f) {
+        dst[x] = 0;
+      } else {
+        // A positive value must never collapse to 0 (= invalid).
+        dst[x] = static_cast<uint16_t>(std::min(65535.f, std::max(1.f, std::round(v * 256.f))));
+      }
+    }
+  }
+  WriteAtomically(path, [&](const std::string& temp) {
+    RequireFile(cv::imwrite(temp, out), path, "cannot write PNG");
+  });
+}
+
+namespace {
+
+// Parses the .npy header; returns the data offset. Supports v1/v2 headers,
+// little-endian float32, C order, 3 dimensions.
+size_t ParseNpyHeader(const std::string& path, const char* data, size_t size, int* n, int* h, int* w) {
+  RequireFile(size >= 10 && std::memcmp(data, "\x93NUMPY", 6) == 0, path, "not a .npy file");
+  const int major = static_cast<unsigned char>(data[6]);
+  size_t header_len = 0, offset = 0;
+  if (major == 1) {
+    header_len = static_cast<unsigned char>(data[8]) | (static_cast<unsigned char>(data[9]) << 8);
+    offset = 10;
+  } else {
+    RequireFile(size >= 12, path, "truncated .npy header");
+    header_len = 0;
+    for (int i = 0; i < 4; ++i) header_len |= static_cast<size_t>(static_cast<unsigned char>(data[8 + i])) << (8 * i);
+    offset = 12;
+  }
+  RequireFile(offset + header_len <= size, path, "truncated .npy header");
+  const std::string header(data + offset, header_len);
+  RequireFile(header.find("'descr': '<f4'") != std::string::npos, path,
+              "expected little-endian float32 data ('<f4')");
+  RequireFile(header.find("'fortran_order': False") != std::string::npos, path,
+              "Fortran-order arrays are not supported");
+  const auto open = header.find("'shape': (");
+  RequireFile(open != std::string::npos, path, "no shape in .npy header");
+  const auto close = header.find(')', open);
+  std::string shape = header.substr(open + 10, close - open - 10);
+  std::vector<long> dims;
+  size_t pos = 0;
+  while (pos < shape.size()) {
+    while (pos < shape.size() && (shape[pos] == ' ' || shape[pos] == ',')) ++pos;
+    if (pos >= shape.size()) break;
+    size_t used = 0;
+    dims.push_back(std::stol(shape.substr(pos), &used));
+    pos += used;
+  }
+  RequireFile(dims.size() == 3, path, "expected a (N, H, W) array, got " + std::to_string(dims.size()) + " dims");
+  *n = static_cast<int>(dims[0]);
+  *h = static_cast<int>(dims[1]);
+  *w = static_cast<int>(dims[2]);
+  const size_t data_offset = offset + header_len;
+  RequireFile(data_offset + sizeof(float) * static_cast<size_t>(*n) * *h * *w <= size, path,
+              "file shorter than its shape says");
+  return data_offset;
+}
+
+}  // namespace
+
+NpyDisparityStack::NpyDisparityStack(const std::string& path) : path_(path) {
+  const int fd = ::open(path.c_str(), O_RDONLY);
+  RequireFile(fd >= 0, path, "cannot open .npy file");
+  struct stat st {};
+  if (::fstat(fd, &st) != 0 || st.st_size <= 0) {
+    ::close(fd);
+    throw Error(path, "cannot stat .npy file or file is empty");
+  }
+  mapped_size_ = static_cast<size_t>(st.st_size);
+  mapped_ = ::mmap(nullptr, mapped_size_, PROT_READ, MAP_PRIVATE, fd, 0);
+  ::close(fd);
+  RequireFile(mapped_ != MAP_FAILED, path, "cannot memory-map .npy file");
+  try {
+    data_offset_ = ParseNpyHeader(path, static_cast<const char*>(mapped_), mapped_size_, &count_, &height_, &width_);
+  } catch (...) {
+    ::munmap(mapped_, mapped_size_);
+    mapped_ = nullptr;
+    throw;
+  }
+}
+
+NpyDisparityStack::~NpyDisparityStack() {
+  if (mapped_ != nullptr && mapped_ != MAP_FAILED) ::munmap(mapped_, mapped_size_);
+}
+
+cv::Mat NpyDisparityStack::Frame(int index, int image_width, int image_height) const {
+  RequireFile(index >= 0 && index < count_, path_,
+              "frame " + std::to_string(index) + " out of range (stack holds " + std::to_string(count_) + ")");
+  const float* base = reinterpret_cast<const float*>(static_cast<const char*>(mapped_) + data_offset_) +
+                      static_cast<size_t>(index) * height_ * width_;
+  cv::Mat view(height_, width_, CV_32F, const_cast<float*>(base));
+  for (int y = 0; y < height_; ++y) {
+    const float* row = view.ptr<float>(y);
+    for (int x = 0; x < width_; ++x) {
+      RequireFile(std::isfinite(row[x]), path_,
+                  "non-finite value in frame " + std::to_string(index) + " at (" + std::to_string(x) + ", " +
+                      std::to_string(y) + ")");
+    }
+  }
+  cv::Mat out;
+  if (image_width != width_ || image_height != height_) {
+    cv::resize(view, out, cv::Size(image_width, image_height), 0, 0, cv::INTER_LINEAR);
+  } else {
+    out = view.clone();
+  }
+  out *= static_cast<double>(image_width);
+  return out;
+}
+
+void WriteNpyStack(const std::string& path, const std::vector<cv::Mat>& maps) {
+  Require(!maps.empty(), "WriteNpyStack: no maps to write (" + path + ")");
+  const int h = maps[0].rows, w = maps[0].cols;
+  for (const auto& m : maps) {
+    Require(m.type() == CV_32FC1 && m.rows == h && m.cols == w, "WriteNpyStack: maps must be CV_32FC1 of equal size");
+  }
+  std::string header = "{'descr': '<f4', 'fortran_order': False, 'shape': (" + std::to_string(maps.size()) + ", " +
+                       std::to_string(h) + ", " + std::to_string(w) + "), }";
+  const size_t total = 10 + header.size() + 1;
+  header.append((64 - total % 64) % 64, ' ');
+  header.push_back('\n');
+  WriteAtomically(path, [&](const std::string& temp) {
+    std::ofstream out(temp, std::ios::binary);
+    RequireFile(out.good(), path, "cannot write .npy file");
+    out.write("\x93NUMPY\x01\x00", 8);
+    const uint16_t len = static_cast<uint16_t>(header.size());
+    const char len_bytes[2] = {static_cast<char>(len & 0xff), static_cast<char>(len >> 8)};
+    out.write(len_bytes, 2);
+    out.write(header.data(), static_cast<std::streamsize>(header.size()));
+    for (const auto& m : maps) {
+      for (int y = 0; y < h; ++y) out.write(reinterpret_cast<const char*>(m.ptr<float>(y)), sizeof(float) * w);
+    }
+    RequireFile(out.good(), path, "error while writing .npy file");
+  });
+}
+
+}  // namespace dvso

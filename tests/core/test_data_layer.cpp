@@ -1,0 +1,333 @@
+// Unit tests of the data layer: cameras, trajectories, maps, sequence readers, strict YAML.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <opencv2/imgcodecs.hpp>
+
+#include "core/camera.h"
+#include "core/config_yaml.h"
+#include "core/disparity_io.h"
+#include "core/disparity_source.h"
+#include "core/error.h"
+#include "core/fs_util.h"
+#include "core/lie.h"
+#include "core/sequence.h"
+#include "core/trajectory.h"
+
+namespace fs = std::filesystem;
+using namespace dvso;
+
+namespace {
+
+std::string TempDir(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("dvso_test_" + name + "_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir.string();
+}
+
+void WriteText(const std::string& path, const std::string& text) {
+  std::ofstream out(path);
+  out << text;
+}
+
+cv::Mat RandomImage(int w, int h, int seed) {
+  cv::Mat img(h, w, CV_8UC1);
+  cv::RNG rng(seed);
+  rng.fill(img, cv::RNG::UNIFORM, 0, 255);
+  return img;
+}
+
+// A tiny KITTI-layout sequence of `n` frames, w x h.
+std::string MakeKittiSequence(const std::string& name, int n, int w, int h) {
+  const std::string root = TempDir(name);
+  fs::create_directories(root + "/image_0");
+  fs::create_directories(root + "/image_1");
+  StereoCamera cam;
+  cam.left = PinholeCamera{100.0, 101.0, w / 2.0, h / 2.0, w, h};
+  cam.baseline = 0.5;
+  WriteKittiCalibration(root + "/calib.txt", cam);
+  std::string times;
+  for (int i = 0; i < n; ++i) {
+    cv::imwrite(root + "/image_0/" + FrameFileName(i, ".png"), RandomImage(w, h, i));
+    cv::imwrite(root + "/image_1/" + FrameFileName(i, ".png"), RandomImage(w, h, 100 + i));
+    times += std::to_string(0.25 * i) + "\n";
+  }
+  WriteText(root + "/times.txt", times);
+  return root;
+}
+
+}  // namespace
+
+TEST(Camera, ResizeKeepsPixelCentres) {
+  PinholeCamera cam{500, 400, 319.5, 239.5, 640, 480};
+  const PinholeCamera half = cam.Resized(320, 240);
+  EXPECT_DOUBLE_EQ(half.fx, 250);
+  EXPECT_DOUBLE_EQ(half.fy, 200);
+  // The image centre stays the image centre.
+  EXPECT_DOUBLE_EQ(half.cx, 159.5);
+  EXPECT_DOUBLE_EQ(half.cy, 119.5);
+  // A 3D point projects to corresponding positions: u' = (u + 0.5) * s - 0.5.
+  const Eigen::Vector3d p(0.3, -0.2, 2.0);
+  const Eigen::Vector2d a = cam.Project(p), b = half.Project(p);
+  EXPECT_NEAR(b.x(), (a.x() + 0.5) * 0.5 - 0.5, 1e-12);
+  EXPECT_NEAR(b.y(), (a.y() + 0.5) * 0.5 - 0.5, 1e-12);
+}
+
+TEST(Camera, CropShiftsPrincipalPointAndRejectsOutside) {
+  PinholeCamera cam{500, 500, 300, 200, 640, 480};
+  const PinholeCamera c = cam.Cropped(10, 20, 600, 400);
+  EXPECT_DOUBLE_EQ(c.cx, 290);
+  EXPECT_DOUBLE_EQ(c.cy, 180);
+  EXPECT_EQ(c.width, 600);
+  EXPECT_THROW(cam.Cropped(100, 0, 600, 480), Error);
+  PinholeCamera bad = cam;
+  bad.fx = -1;
+  EXPECT_THROW(bad.Check(), Error);
+}
+
+TEST(Camera, DsoCameraFileRoundTripAndRelativeIntrinsics) {
+  const std::string dir = TempDir("camfile");
+  PinholeCamera cam{718.856, 718.856, 607.1928, 185.2157, 1241, 376};
+  WriteDsoCameraFile(dir + "/camera.txt", cam);
+  const PinholeCamera back = ReadDsoCameraFile(dir + "/camera.txt");
+  EXPECT_NEAR(back.fx, cam.fx, 1e-6);
+  EXPECT_NEAR(back.cy, cam.cy, 1e-6);
+  EXPECT_EQ(back.width, 1241);
+  WriteText(dir + "/rel.txt", "0.5 0.5 0.5 0.5 0\n640 480\nnone\n640 480\n");
+  const PinholeCamera rel = ReadDsoCameraFile(dir + "/rel.txt");
+  EXPECT_DOUBLE_EQ(rel.fx, 320);
+  EXPECT_DOUBLE_EQ(rel.cx, 319.5);
+  WriteText(dir + "/fov.txt", "FOV 0.5 0.5 0.5 0.5 0.9\n640 480\n");
+  EXPECT_THROW(ReadDsoCameraFile(dir + "/fov.txt"), Error);
+}
+
+TEST(Lie, ExpLogRoundTrip) {
+  Vector6d xi;
+  xi << 0.3, -0.2, 1.5, 0.1, -0.4, 0.25;
+  const Eigen::Isometry3d T = ExpSE3(xi);
+  EXPECT_TRUE(LogSE3(T).isApprox(xi, 1e-10));
+  EXPECT_NEAR(RotationAngle(T.linear()), xi.tail<3>().norm(), 1e-12);
+}
+
+TEST(Trajectory, KittiAndTumRoundTrip) {
+  const std::string dir = TempDir("traj");
+  Trajectory t;
+  for (int i = 0; i < 5; ++i) {
+    Vector6d xi;
+    xi << i * 1.0, 0.1 * i, -0.5 * i, 0.01 * i, 0.2 * i, -0.03 * i;
+    t.poses.push_back({0.1 * i, ExpSE3(xi)});
+  }
+  WriteKittiTrajectory(dir + "/k.txt", t);
+  WriteTumTrajectory(dir + "/t.txt", t);
+  const Trajectory k = ReadTrajectory(dir + "/k.txt");
+  const Trajectory u = ReadTrajectory(dir + "/t.txt");
+  ASSERT_EQ(k.size(), 5u);
+  ASSERT_EQ(u.size(), 5u);
+  for (int i = 0; i < 5; ++i) {
+    EXPECT_TRUE(k.poses[i].T_world_camera.isApprox(t.poses[i].T_world_camera, 1e-9));
+    EXPECT_TRUE(u.poses[i].T_world_camera.isApprox(t.poses[i].T_world_camera, 1e-9));
+    EXPECT_DOUBLE_EQ(k.poses[i].timestamp, i);  // KITTI: line index
+    EXPECT_NEAR(u.poses[i].timestamp, 0.1 * i, 1e-12);
+  }
+  EXPECT_NEAR(t.PathLength(), k.PathLength(), 1e-9);
+}
+
+TEST(Trajectory, RealKittiPosesLoad) {
+  const Trajectory t = ReadTrajectory(std::string(DVSO_TEST_DATA_DIR) + "/kitti_poses/04.txt");
+  EXPECT_EQ(t.size(), 271u);
+  EXPECT_TRUE(t.poses[0].T_world_camera.isApprox(Eigen::Isometry3d::Identity(), 1e-6));
+  EXPECT_GT(t.PathLength(), 300.0);  // sequence 04 is a ~394 m straight drive
+}
+
+TEST(Trajectory, MalformedInputNamesFileAndLine) {
+  const std::string dir = TempDir("trajbad");
+  WriteText(dir + "/bad.txt", "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 0 0 1 0 nan 0 0 1 0\n");
+  try {
+    ReadTrajectory(dir + "/bad.txt");
+    FAIL() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("bad.txt"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("line 2"), std::string::npos);
+  }
+  WriteText(dir + "/empty.txt", "# nothing\n");
+  EXPECT_THROW(ReadTrajectory(dir + "/empty.txt"), Error);
+  EXPECT_THROW(ReadTrajectory(dir + "/missing.txt"), Error);
+}
+
+TEST(DisparityIo, KittiPngRoundTripQuantisesTo1Over256) {
+  const std::string dir = TempDir("disp");
+  cv::Mat map(4, 5, CV_32F, cv::Scalar(0));
+  map.at<float>(0, 0) = 12.345f;
+  map.at<float>(1, 2) = 0.001f;  // positive but tiny: must stay valid
+  map.at<float>(3, 4) = -3.f;    // invalid
+  map.at<float>(2, 1) = std::numeric_limits<float>::quiet_NaN();
+  WriteKittiMapPng(dir + "/d.png", map);
+  const cv::Mat back = ReadKittiMapPng(dir + "/d.png");
+  EXPECT_NEAR(back.at<float>(0, 0), 12.345f, 0.5f / 256);
+  EXPECT_FLOAT_EQ(back.at<float>(1, 2), 1.f / 256);
+  EXPECT_FLOAT_EQ(back.at<float>(3, 4), 0.f);
+  EXPECT_FLOAT_EQ(back.at<float>(2, 1), 0.f);
+  EXPECT_FALSE(fs::exists(dir + "/d.tmp-writing.png"));
+  // An 8-bit PNG is not a KITTI map.
+  cv::imwrite(dir + "/eight.png", cv::Mat(3, 3, CV_8U, cv::Scalar(7)));
+  EXPECT_THROW(ReadKittiMapPng(dir + "/eight.png"), Error);
+}
+
+TEST(DisparityIo, RealKitti2015GroundTruthReads) {
+  const cv::Mat gt = ReadKittiMapPng(std::string(DVSO_TEST_DATA_DIR) + "/kitti_stereo_2015_sample/disp_occ_0/000046_10.png");
+  EXPECT_EQ(gt.cols, 1242);
+  EXPECT_EQ(gt.rows, 375);
+  double max_value = 0;
+  cv::minMaxLoc(gt, nullptr, &max_value);
+  EXPECT_GT(max_value, 10.0);
+  EXPECT_LT(max_value, 256.0);
+  EXPECT_GT(cv::countNonZero(gt), 10000);
+}
+
+TEST(DisparityIo, NpyStackIsScaledByWidthAndResized) {
+  const std::string dir = TempDir("npy");
+  std::vector<cv::Mat> maps;
+  for (int i = 0; i < 3; ++i) maps.push_back(cv::Mat(4, 8, CV_32F, cv::Scalar(0.01 * (i + 1))));
+  WriteNpyStack(dir + "/d.npy", maps);
+  NpyDisparityStack stack(dir + "/d.npy");
+  EXPECT_EQ(stack.size(), 3);
+  EXPECT_EQ(stack.height(), 4);
+  EXPECT_EQ(stack.width(), 8);
+  const cv::Mat f = stack.Frame(2, 16, 8);
+  EXPECT_EQ(f.cols, 16);
+  EXPECT_NEAR(f.at<float>(3, 5), 0.03 * 16, 1e-5);
+  EXPECT_THROW(stack.Frame(3, 8, 4), Error);
+  maps[1].at<float>(2, 2) = std::numeric_limits<float>::quiet_NaN();
+  WriteNpyStack(dir + "/nan.npy", maps);
+  NpyDisparityStack with_nan(dir + "/nan.npy");
+  EXPECT_NO_THROW(with_nan.Frame(0, 8, 4));
+  EXPECT_THROW(with_nan.Frame(1, 8, 4), Error);
+  WriteText(dir + "/not.npy", "hello");
+  EXPECT_THROW(NpyDisparityStack(dir + "/not.npy"), Error);
+}
+
+TEST(DisparitySource, FolderSourceResizesAndScales) {
+  const std::string dir = TempDir("dsrc");
+  fs::create_directories(dir + "/l");
+  fs::create_directories(dir + "/r");
+  WriteKittiMapPng(dir + "/l/000003.png", cv::Mat(10, 20, CV_32F, cv::Scalar(4.0)));
+  WriteKittiMapPng(dir + "/r/000003.png", cv::Mat(10, 20, CV_32F, cv::Scalar(2.0)));
+  FileDisparitySource source(dir + "/l", dir + "/r");
+  const DisparityPair p = source.Predict(3, cv::Mat(20, 40, CV_8U));
+  EXPECT_EQ(p.left.cols, 40);
+  EXPECT_FLOAT_EQ(p.left.at<float>(5, 5), 8.0f);
+  EXPECT_FLOAT_EQ(p.right.at<float>(5, 5), 4.0f);
+  EXPECT_THROW(source.Predict(4, cv::Mat(20, 40, CV_8U)), Error);
+}
+
+TEST(SequenceReader, KittiLayoutStreamsFrames) {
+  const std::string root = MakeKittiSequence("kitti", 3, 37, 21);  // odd sizes on purpose
+  auto seq = OpenSequence(root);
+  ASSERT_EQ(seq->size(), 3);
+  EXPECT_TRUE(seq->is_stereo());
+  EXPECT_NEAR(seq->camera().baseline, 0.5, 1e-9);
+  EXPECT_NEAR(seq->camera().left.fy, 101.0, 1e-9);
+  EXPECT_EQ(seq->camera().left.width, 37);
+  EXPECT_NEAR(seq->timestamps()[2], 0.5, 1e-9);
+  const StereoFrame f = seq->Read(1);
+  EXPECT_EQ(f.left.type(), CV_8UC1);
+  EXPECT_EQ(cv::norm(f.left, RandomImage(37, 21, 1), cv::NORM_INF), 0.0);
+  EXPECT_EQ(cv::norm(f.right, RandomImage(37, 21, 101), cv::NORM_INF), 0.0);
+  SequenceReadOptions mono;
+  mono.load_right = false;
+  EXPECT_TRUE(seq->Read(2, mono).right.empty());
+}
+
+TEST(SequenceReader, KittiErrorsNameTheFile) {
+  const std::string root = MakeKittiSequence("kittibad", 3, 16, 8);
+  cv::imwrite(root + "/image_0/000002.png", RandomImage(17, 8, 0));  // size mismatch
+  auto seq = OpenSequence(root);
+  try {
+    seq->Read(2);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("000002.png"), std::string::npos);
+  }
+  WriteText(root + "/image_1/000001.png", "not a png");
+  EXPECT_THROW(seq->Read(1), Error);
+  WriteText(root + "/calib.txt", "P0: 1 2 3\n");
+  EXPECT_THROW(OpenSequence(root), Error);
+  const std::string empty = TempDir("emptyseq");
+  fs::create_directories(empty + "/image_0");
+  WriteText(empty + "/calib.txt", "P0: 1 0 1 0 0 1 1 0 0 0 1 0\n");
+  EXPECT_THROW(OpenSequence(empty), Error);
+  EXPECT_THROW(OpenSequence(TempDir("nolayout")), Error);
+}
+
+TEST(SequenceReader, EurocIsRectifiedWithMetricBaseline) {
+  const std::string root = TempDir("euroc");
+  const int w = 64, h = 48;
+  for (int c = 0; c < 2; ++c) {
+    const std::string cam = root + "/mav0/cam" + std::to_string(c);
+    fs::create_directories(cam + "/data");
+    // cam1 is 0.11 m to the right of cam0, same orientation, no distortion.
+    const double tx = c == 0 ? 0.0 : 0.11;
+    WriteText(cam + "/sensor.yaml",
+              "sensor_type: camera\nT_BS:\n  cols: 4\n  rows: 4\n  data: [1, 0, 0, " + std::to_string(tx) +
+                  ", 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]\nrate_hz: 20\nresolution: [64, 48]\n"
+                  "camera_model: pinhole\nintrinsics: [50.0, 50.0, 32.0, 24.0]\n"
+                  "distortion_model: radial-tangential\ndistortion_coefficients: [0.0, 0.0, 0.0, 0.0]\n");
+    std::string csv = "#timestamp [ns],filename\n";
+    for (int i = 0; i < 2; ++i) {
+      const std::string name = std::to_string(1000000000LL + i * 50000000LL) + ".png";
+      cv::imwrite(cam + "/data/" + name, RandomImage(w, h, i + 10 * c));
+      csv += std::to_string(1000000000LL + i * 50000000LL) + "," + name + "\n";
+    }
+    WriteText(cam + "/data.csv", csv);
+  }
+  auto seq = OpenSequence(root);
+  EXPECT_EQ(seq->size(), 2);
+  EXPECT_NEAR(seq->camera().baseline, 0.11, 1e-6);
+  EXPECT_NEAR(seq->timestamps()[1] - seq->timestamps()[0], 0.05, 1e-9);
+  const StereoFrame f = seq->Read(0);
+  EXPECT_EQ(f.left.size(), cv::Size(w, h));
+  EXPECT_FALSE(f.right.empty());
+}
+
+TEST(SequenceReader, MonocularFolderNeedsCameraFile) {
+  const std::string root = TempDir("mono");
+  for (int i = 0; i < 2; ++i) cv::imwrite(root + "/img" + std::to_string(i) + ".png", RandomImage(30, 20, i));
+  EXPECT_THROW(OpenSequence(root), Error);
+  const std::string camfile = TempDir("monocam") + "/camera.txt";
+  WriteDsoCameraFile(camfile, PinholeCamera{40, 40, 15, 10, 30, 20});
+  auto seq = OpenSequence(root, camfile);
+  EXPECT_EQ(seq->size(), 2);
+  EXPECT_FALSE(seq->is_stereo());
+  EXPECT_TRUE(seq->Read(1).right.empty());
+}
+
+TEST(YamlSection, StrictKeysAndNestedSections) {
+  YamlSection s = YamlSection::FromString("points: 800\ntracker:\n  levels: 4\n", "cfg");
+  int points = 2000, levels = 5;
+  double unused = 1.0;
+  s.Read("points", &points);
+  s.Child("tracker").Read("levels", &levels);
+  s.Read("absent", &unused);
+  EXPECT_EQ(points, 800);
+  EXPECT_EQ(levels, 4);
+  EXPECT_EQ(unused, 1.0);
+  EXPECT_NO_THROW(s.RequireAllKeysUsed());
+
+  YamlSection typo = YamlSection::FromString("pionts: 800\ntracker:\n  lvls: 4\n", "cfg");
+  typo.Read("points", &points);
+  typo.Child("tracker").Read("levels", &levels);
+  try {
+    typo.RequireAllKeysUsed();
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("pionts"), std::string::npos);
+  }
+  YamlSection nested = YamlSection::FromString("tracker:\n  lvls: 4\n", "cfg");
+  nested.Child("tracker").Read("levels", &levels);
+  EXPECT_THROW(nested.RequireAllKeysUsed(), Error);
+  YamlSection wrong_type = YamlSection::FromString("points: many\n", "cfg");
+  EXPECT_THROW(wrong_type.Read("points", &points), Error);
+}
