@@ -1,14 +1,73 @@
-// PLACEHOLDER until the owning issue lands: registers `dvso eval-depth` so the CLI
-// lists it, and fails loudly when run.
+// `dvso eval-depth`: Eigen et al. / monodepth depth metrics of a folder of
+// predicted maps against a folder of GT maps (core/eval_depth.h; docs/evaluation.md).
+#include <iostream>
+#include <memory>
+
 #include "core/error.h"
+#include "core/eval_depth.h"
+#include "core/sequence.h"
 #include "pipelines/commands.h"
 
 namespace dvso::cli {
 
+namespace {
+
+struct EvalDepthArgs {
+  std::string pred_dir, gt_dir, calib_path;
+  std::string pred_kind = "disparity", gt_kind = "disparity", crop = "none";
+  bool json = false;
+  DepthEvalOptions options;
+};
+
+void Run(EvalDepthArgs& args) {
+  args.options.pred_kind = ParseMapKind(args.pred_kind);
+  args.options.gt_kind = ParseMapKind(args.gt_kind);
+  args.options.crop = ParseDepthCrop(args.crop);
+  if (!args.calib_path.empty()) {
+    Require(args.options.fxb <= 0.0, "give either --fxb or --calib, not both");
+    // Image size does not enter fx * baseline; KITTI's 1241 x 376 keeps Check() satisfied.
+    args.options.fxb = ReadKittiCalibration(args.calib_path, 1241, 376).FxB();
+  }
+  args.options.Check();
+  if (!args.json) {
+    std::cout << "predictions  : " << args.pred_dir << " (" << MapKindName(args.options.pred_kind) << ")\n"
+              << "ground truth : " << args.gt_dir << " (" << MapKindName(args.options.gt_kind) << ")\n";
+    if (args.options.fxb > 0.0) std::cout << "fx * baseline: " << args.options.fxb << " px m\n";
+    std::cout << "\n";
+  }
+  const DepthEvalResult result = EvaluateDepthFolders(args.pred_dir, args.gt_dir, args.options);
+  if (args.json) {
+    std::cout << DepthEvalResultToJson(result, args.options).dump(2) << std::endl;
+  } else {
+    std::cout << FormatDepthEvalResult(result, args.options);
+  }
+}
+
+}  // namespace
+
 void AddEvalDepthCommand(CLI::App& app) {
-  auto* cmd = app.add_subcommand("eval-depth", "Depth metrics (abs rel, sq rel, RMSE, RMSE log, delta) (not implemented yet)");
-  cmd->allow_extras();
-  cmd->callback([] { throw Error("'dvso eval-depth' is not implemented yet"); });
+  auto args = std::make_shared<EvalDepthArgs>();
+  auto* cmd = app.add_subcommand(
+      "eval-depth", "Depth metrics (abs rel, sq rel, RMSE, RMSE log, delta < 1.25^k) of predicted vs GT maps");
+  cmd->add_option("--pred", args->pred_dir, "folder of predicted KITTI uint16 PNG maps (value / 256)")
+      ->required();
+  cmd->add_option("--gt", args->gt_dir, "folder of GT KITTI uint16 PNG maps with the same file names (0 = invalid)")
+      ->required();
+  cmd->add_option("--pred-kind", args->pred_kind, "predictions hold depth (m) or disparity (px)")
+      ->capture_default_str();
+  cmd->add_option("--gt-kind", args->gt_kind, "GT holds depth (m) or disparity (px)")->capture_default_str();
+  auto* fxb = cmd->add_option("--fxb", args->options.fxb,
+                              "focal length (px, GT resolution) * baseline (m) to turn disparity into depth");
+  cmd->add_option("--calib", args->calib_path, "KITTI odometry calib.txt giving fx * baseline (P0, P1)")->excludes(fxb);
+  cmd->add_option("--crop", args->crop, "evaluation crop: none, eigen or garg")->capture_default_str();
+  cmd->add_option("--min-depth", args->options.min_depth, "GT kept above, predictions clamped to (m)")
+      ->capture_default_str();
+  cmd->add_option("--max-depth", args->options.max_depth, "GT kept below, predictions clamped to (m)")
+      ->capture_default_str();
+  cmd->add_flag("--median-scaling", args->options.median_scaling,
+                "scale each prediction by median(GT) / median(prediction) (monocular)");
+  cmd->add_flag("--json", args->json, "print exactly one JSON object on stdout");
+  cmd->callback([args] { Run(*args); });
 }
 
 }  // namespace dvso::cli

@@ -1,0 +1,320 @@
+#include "core/eval_depth.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <filesystem>
+#include <iomanip>
+#include <limits>
+#include <opencv2/imgproc.hpp>
+#include <set>
+#include <sstream>
+
+#include "core/disparity_io.h"
+#include "core/error.h"
+#include "core/fs_util.h"
+
+namespace dvso {
+
+namespace {
+
+std::string Lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return s;
+}
+
+// numpy.median semantics: mean of the two middle values for even counts.
+double Median(std::vector<double> values) {
+  const size_t mid = values.size() / 2;
+  std::nth_element(values.begin(), values.begin() + mid, values.end());
+  const double upper = values[mid];
+  if (values.size() % 2 == 1) return upper;
+  return 0.5 * (upper + *std::max_element(values.begin(), values.begin() + mid));
+}
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+}  // namespace
+
+MapKind ParseMapKind(const std::string& name) {
+  const std::string lower = Lower(name);
+  if (lower == "depth") return MapKind::kDepth;
+  if (lower == "disparity" || lower == "disp") return MapKind::kDisparity;
+  throw Error("unknown map kind '" + name + "' (expected depth or disparity)");
+}
+
+DepthCrop ParseDepthCrop(const std::string& name) {
+  const std::string lower = Lower(name);
+  if (lower == "none") return DepthCrop::kNone;
+  if (lower == "eigen") return DepthCrop::kEigen;
+  if (lower == "garg") return DepthCrop::kGarg;
+  throw Error("unknown crop '" + name + "' (expected none, eigen or garg)");
+}
+
+std::string MapKindName(MapKind kind) { return kind == MapKind::kDepth ? "depth" : "disparity"; }
+
+std::string DepthCropName(DepthCrop crop) {
+  switch (crop) {
+    case DepthCrop::kNone: return "none";
+    case DepthCrop::kEigen: return "eigen";
+    case DepthCrop::kGarg: return "garg";
+  }
+  return "unknown";
+}
+
+void DepthEvalOptions::Check() const {
+  Require(std::isfinite(min_depth) && min_depth > 0.0, "eval-depth: min_depth must be > 0");
+  Require(std::isfinite(max_depth) && max_depth > min_depth, "eval-depth: max_depth must be > min_depth");
+  if (pred_kind == MapKind::kDisparity || gt_kind == MapKind::kDisparity) {
+    Require(std::isfinite(fxb) && fxb > 0.0,
+            "eval-depth: disparity maps need focal length * baseline (--fxb or --calib) to become depths");
+  }
+}
+
+cv::Rect DepthCropRegion(DepthCrop crop, int width, int height) {
+  // Fractions of monodepth's evaluate_kitti.py, truncated like numpy's astype(int32).
+  double r0 = 0, r1 = 1, c0 = 0, c1 = 1;
+  if (crop == DepthCrop::kGarg) {
+    r0 = 0.40810811, r1 = 0.99189189, c0 = 0.03594771, c1 = 0.96405229;
+  } else if (crop == DepthCrop::kEigen) {
+    r0 = 0.3324324, r1 = 0.91351351, c0 = 0.0359477, c1 = 0.96405229;
+  } else {
+    return cv::Rect(0, 0, width, height);
+  }
+  const int top = static_cast<int>(r0 * height), bottom = static_cast<int>(r1 * height);
+  const int left = static_cast<int>(c0 * width), right = static_cast<int>(c1 * width);
+  return cv::Rect(left, top, std::max(0, right - left), std::max(0, bottom - top));
+}
+
+cv::Mat ResizePrediction(const cv::Mat& prediction, MapKind kind, cv::Size gt_size) {
+  Require(prediction.type() == CV_32F, "ResizePrediction expects a CV_32F map");
+  if (prediction.size() == gt_size) return prediction.clone();
+  cv::Mat resized;
+  cv::resize(prediction, resized, gt_size, 0, 0, cv::INTER_LINEAR);
+  if (kind == MapKind::kDisparity) resized *= static_cast<double>(gt_size.width) / prediction.cols;
+  return resized;
+}
+
+cv::Mat DisparityToDepth(const cv::Mat& disparity, double fxb, float nonpositive_value) {
+  Require(disparity.type() == CV_32F, "DisparityToDepth expects a CV_32F map");
+  cv::Mat depth(disparity.size(), CV_32F);
+  for (int v = 0; v < disparity.rows; ++v) {
+    const float* d = disparity.ptr<float>(v);
+    float* z = depth.ptr<float>(v);
+    for (int u = 0; u < disparity.cols; ++u) {
+      z[u] = (std::isfinite(d[u]) && d[u] > 0.0f) ? static_cast<float>(fxb / d[u]) : nonpositive_value;
+    }
+  }
+  return depth;
+}
+
+DepthMetrics ComputeDepthMetrics(const cv::Mat& pred_depth, const cv::Mat& gt_depth,
+                                 const DepthEvalOptions& options) {
+  options.Check();
+  Require(pred_depth.type() == CV_32F && gt_depth.type() == CV_32F, "depth maps must be CV_32F");
+  Require(pred_depth.size() == gt_depth.size(), "prediction and GT depth maps differ in size");
+  const cv::Rect crop = DepthCropRegion(options.crop, gt_depth.cols, gt_depth.rows);
+
+  // Mask: inside the crop, GT strictly inside (min_depth, max_depth).
+  std::vector<double> gt, pred;
+  for (int v = crop.y; v < crop.y + crop.height; ++v) {
+    const float* g = gt_depth.ptr<float>(v);
+    const float* p = pred_depth.ptr<float>(v);
+    for (int u = crop.x; u < crop.x + crop.width; ++u) {
+      if (!std::isfinite(g[u]) || g[u] <= options.min_depth || g[u] >= options.max_depth) continue;
+      Require(!std::isnan(p[u]), "predicted depth is NaN at pixel (" + std::to_string(u) + ", " +
+                                     std::to_string(v) + ")");
+      gt.push_back(g[u]);
+      pred.push_back(p[u]);  // +inf (zero disparity) is clamped to max_depth below
+    }
+  }
+  DepthMetrics m;
+  m.valid_pixels = static_cast<long>(gt.size());
+  if (gt.empty()) {
+    m.abs_rel = m.sq_rel = m.rmse = m.rmse_log = m.a1 = m.a2 = m.a3 = kNaN;
+    return m;
+  }
+  if (options.median_scaling) {
+    const double pred_median = Median(pred);
+    Require(std::isfinite(pred_median) && pred_median > 0.0,
+            "median scaling impossible: the median predicted depth is not a positive number");
+    m.scale = Median(gt) / pred_median;
+    for (double& p : pred) p *= m.scale;
+  }
+  double abs_rel = 0, sq_rel = 0, sq = 0, sq_log = 0;
+  long a1 = 0, a2 = 0, a3 = 0;
+  for (size_t i = 0; i < gt.size(); ++i) {
+    const double d = std::min(std::max(pred[i], options.min_depth), options.max_depth);
+    const double g = gt[i];
+    const double diff = d - g;
+    abs_rel += std::abs(diff) / g;
+    sq_rel += diff * diff / g;
+    sq += diff * diff;
+    const double log_diff = std::log(d) - std::log(g);
+    sq_log += log_diff * log_diff;
+    const double ratio = std::max(d / g, g / d);
+    a1 += ratio < 1.25;
+    a2 += ratio < 1.25 * 1.25;
+    a3 += ratio < 1.25 * 1.25 * 1.25;
+  }
+  const double n = static_cast<double>(gt.size());
+  m.abs_rel = abs_rel / n;
+  m.sq_rel = sq_rel / n;
+  m.rmse = std::sqrt(sq / n);
+  m.rmse_log = std::sqrt(sq_log / n);
+  m.a1 = a1 / n;
+  m.a2 = a2 / n;
+  m.a3 = a3 / n;
+  return m;
+}
+
+DepthMetrics AverageDepthMetrics(const std::vector<DepthMetrics>& per_image) {
+  DepthMetrics mean;
+  mean.scale = 0.0;
+  int count = 0;
+  for (const DepthMetrics& m : per_image) {
+    if (m.valid_pixels == 0) continue;
+    mean.abs_rel += m.abs_rel;
+    mean.sq_rel += m.sq_rel;
+    mean.rmse += m.rmse;
+    mean.rmse_log += m.rmse_log;
+    mean.a1 += m.a1;
+    mean.a2 += m.a2;
+    mean.a3 += m.a3;
+    mean.scale += m.scale;
+    mean.valid_pixels += m.valid_pixels;
+    ++count;
+  }
+  Require(count > 0, "no image has a valid ground-truth pixel inside the crop and depth range");
+  for (double* v : {&mean.abs_rel, &mean.sq_rel, &mean.rmse, &mean.rmse_log, &mean.a1, &mean.a2, &mean.a3,
+                    &mean.scale}) {
+    *v /= count;
+  }
+  return mean;
+}
+
+namespace {
+
+std::vector<std::string> ListPngNames(const std::string& dir) {
+  namespace fs = std::filesystem;
+  RequireFile(fs::is_directory(dir), dir, "not a directory");
+  std::vector<std::string> names;
+  for (const auto& entry : fs::directory_iterator(dir)) {
+    if (!entry.is_regular_file()) continue;
+    if (Lower(entry.path().extension().string()) != ".png") continue;
+    names.push_back(entry.path().filename().string());
+  }
+  std::sort(names.begin(), names.end());
+  RequireFile(!names.empty(), dir, "holds no .png maps");
+  return names;
+}
+
+std::string JoinFirst(const std::vector<std::string>& names, size_t max_count) {
+  std::string s;
+  for (size_t i = 0; i < names.size() && i < max_count; ++i) s += (i ? ", " : "") + names[i];
+  if (names.size() > max_count) s += ", ... (" + std::to_string(names.size() - max_count) + " more)";
+  return s;
+}
+
+}  // namespace
+
+DepthEvalResult EvaluateDepthFolders(const std::string& pred_dir, const std::string& gt_dir,
+                                     const DepthEvalOptions& options) {
+  options.Check();
+  const std::vector<std::string> gt_names = ListPngNames(gt_dir);
+  const std::vector<std::string> pred_names = ListPngNames(pred_dir);
+  std::vector<std::string> only_gt, only_pred;
+  std::set_difference(gt_names.begin(), gt_names.end(), pred_names.begin(), pred_names.end(),
+                      std::back_inserter(only_gt));
+  std::set_difference(pred_names.begin(), pred_names.end(), gt_names.begin(), gt_names.end(),
+                      std::back_inserter(only_pred));
+  if (!only_gt.empty() || !only_pred.empty()) {
+    std::string message = "file names of predictions and ground truth differ:";
+    if (!only_gt.empty()) message += " missing in " + pred_dir + ": " + JoinFirst(only_gt, 8) + ";";
+    if (!only_pred.empty()) message += " missing in " + gt_dir + ": " + JoinFirst(only_pred, 8) + ";";
+    throw Error(message);
+  }
+
+  DepthEvalResult result;
+  for (const std::string& name : gt_names) {
+    const std::string gt_path = JoinPath(gt_dir, name);
+    const std::string pred_path = JoinPath(pred_dir, name);
+    const cv::Mat gt_map = ReadKittiMapPng(gt_path);
+    const cv::Mat pred_map = ResizePrediction(ReadKittiMapPng(pred_path), options.pred_kind, gt_map.size());
+    const cv::Mat gt_depth =
+        options.gt_kind == MapKind::kDisparity ? DisparityToDepth(gt_map, options.fxb, 0.0f) : gt_map;
+    const cv::Mat pred_depth = options.pred_kind == MapKind::kDisparity
+                                   ? DisparityToDepth(pred_map, options.fxb, std::numeric_limits<float>::infinity())
+                                   : pred_map;
+    DepthMetrics metrics;
+    try {
+      metrics = ComputeDepthMetrics(pred_depth, gt_depth, options);
+    } catch (const Error& e) {
+      throw Error(pred_path, e.what());
+    }
+    if (metrics.valid_pixels == 0) {
+      result.skipped.push_back(name);
+      continue;
+    }
+    result.names.push_back(name);
+    result.per_image.push_back(metrics);
+  }
+  RequireFile(!result.per_image.empty(), gt_dir,
+              "no ground-truth map has a valid pixel inside the crop and (min_depth, max_depth)");
+  result.mean = AverageDepthMetrics(result.per_image);
+  return result;
+}
+
+namespace {
+
+nlohmann::json MetricsToJson(const DepthMetrics& m, bool with_scale) {
+  nlohmann::json j = {{"abs_rel", m.abs_rel}, {"sq_rel", m.sq_rel}, {"rmse", m.rmse},
+                      {"rmse_log", m.rmse_log}, {"a1", m.a1},        {"a2", m.a2},
+                      {"a3", m.a3},           {"valid_pixels", m.valid_pixels}};
+  if (with_scale) j["scale"] = m.scale;
+  return j;
+}
+
+}  // namespace
+
+nlohmann::json DepthEvalResultToJson(const DepthEvalResult& result, const DepthEvalOptions& options) {
+  nlohmann::json j = MetricsToJson(result.mean, options.median_scaling);
+  j["images"] = result.per_image.size();
+  j["skipped_images"] = result.skipped;
+  j["crop"] = DepthCropName(options.crop);
+  j["min_depth"] = options.min_depth;
+  j["max_depth"] = options.max_depth;
+  j["median_scaling"] = options.median_scaling;
+  j["pred_kind"] = MapKindName(options.pred_kind);
+  j["gt_kind"] = MapKindName(options.gt_kind);
+  if (options.fxb > 0.0) j["fxb"] = options.fxb;
+  nlohmann::json per_image = nlohmann::json::array();
+  for (size_t i = 0; i < result.names.size(); ++i) {
+    nlohmann::json entry = MetricsToJson(result.per_image[i], options.median_scaling);
+    entry["name"] = result.names[i];
+    per_image.push_back(entry);
+  }
+  j["per_image"] = per_image;
+  return j;
+}
+
+std::string FormatDepthEvalResult(const DepthEvalResult& result, const DepthEvalOptions& options) {
+  std::ostringstream out;
+  out << result.per_image.size() << " images (crop " << DepthCropName(options.crop) << ", depth range ("
+      << options.min_depth << ", " << options.max_depth << ") m"
+      << (options.median_scaling ? ", median scaling" : "") << ")\n";
+  if (!result.skipped.empty()) {
+    out << result.skipped.size() << " images without valid GT pixels skipped: " << JoinFirst(result.skipped, 8)
+        << "\n";
+  }
+  const DepthMetrics& m = result.mean;
+  out << std::setw(10) << "abs_rel" << std::setw(10) << "sq_rel" << std::setw(10) << "rmse" << std::setw(10)
+      << "rmse_log" << std::setw(10) << "a1" << std::setw(10) << "a2" << std::setw(10) << "a3" << "\n";
+  out << std::fixed << std::setprecision(4) << std::setw(10) << m.abs_rel << std::setw(10) << m.sq_rel
+      << std::setw(10) << m.rmse << std::setw(10) << m.rmse_log << std::setw(10) << m.a1 << std::setw(10) << m.a2
+      << std::setw(10) << m.a3 << "\n";
+  if (options.median_scaling) out << "mean median-scaling factor: " << m.scale << "\n";
+  return out.str();
+}
+
+}  // namespace dvso

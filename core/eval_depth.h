@@ -1,0 +1,86 @@
+// Single-image depth accuracy as in Eigen et al. (NIPS 2014) and monodepth
+// (Godard et al. CVPR 2017): abs rel, sq rel, RMSE, RMSE log and the
+// threshold accuracies delta < 1.25^k, per image, then averaged over images.
+// Formulas and masking rules: docs/evaluation.md.
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+namespace dvso {
+
+enum class MapKind { kDepth, kDisparity };
+enum class DepthCrop { kNone, kEigen, kGarg };
+
+// "depth" | "disparity"; "none" | "eigen" | "garg". Throw dvso::Error otherwise.
+MapKind ParseMapKind(const std::string& name);
+DepthCrop ParseDepthCrop(const std::string& name);
+std::string MapKindName(MapKind kind);
+std::string DepthCropName(DepthCrop crop);
+
+struct DepthEvalOptions {
+  MapKind pred_kind = MapKind::kDisparity;  // predictions: disparity (px) or depth (m)
+  MapKind gt_kind = MapKind::kDisparity;    // ground truth: disparity (px, KITTI disp_occ) or depth (m)
+  double fxb = 0.0;            // focal length (px, at GT resolution) * baseline (m); needed for disparities
+  DepthCrop crop = DepthCrop::kNone;  // evaluation crop of Eigen et al. or Garg et al. (fractions of GT size)
+  double min_depth = 1e-3;     // GT kept when > min_depth; predictions clamped up to it (m)
+  double max_depth = 80.0;     // GT kept when < max_depth; predictions clamped down to it (m)
+  bool median_scaling = false; // scale predictions by median(gt) / median(pred) per image (monocular)
+
+  // Throws dvso::Error on invalid values (e.g. a disparity kind without fxb).
+  void Check() const;
+};
+
+struct DepthMetrics {
+  double abs_rel = 0.0;   // mean |d - d*| / d*
+  double sq_rel = 0.0;    // mean (d - d*)^2 / d*
+  double rmse = 0.0;      // sqrt(mean (d - d*)^2), metres
+  double rmse_log = 0.0;  // sqrt(mean (log d - log d*)^2)
+  double a1 = 0.0;        // fraction with max(d/d*, d*/d) < 1.25
+  double a2 = 0.0;        // ... < 1.25^2
+  double a3 = 0.0;        // ... < 1.25^3
+  long valid_pixels = 0;  // pixels evaluated (sum over images for aggregates)
+  double scale = 1.0;     // median-scaling factor applied (1 without; mean over images for aggregates)
+};
+
+// Rows [floor(r0 H), floor(r1 H)), columns [floor(c0 W), floor(c1 W)) with the
+// crop fractions of monodepth's evaluation; the whole image for kNone.
+cv::Rect DepthCropRegion(DepthCrop crop, int width, int height);
+
+// Resizes a prediction (CV_32F) to the GT size with bilinear interpolation;
+// disparities are multiplied by gt_width / pred_width (a disparity is a width).
+cv::Mat ResizePrediction(const cv::Mat& prediction, MapKind kind, cv::Size gt_size);
+
+// depth = fxb / disparity. Non-positive disparities become `nonpositive_value`
+// (0 = invalid for GT; +inf = "infinitely far" for predictions, later clamped).
+cv::Mat DisparityToDepth(const cv::Mat& disparity, double fxb, float nonpositive_value);
+
+// Metrics of one image: pred_depth and gt_depth are CV_32F depths (m) of equal
+// size; GT pixels <= 0 or non-finite are invalid. Applies the crop, the GT
+// range mask, median scaling and the clamping of predictions (in that order).
+// valid_pixels == 0 (and all metrics NaN) when no GT pixel survives the mask.
+DepthMetrics ComputeDepthMetrics(const cv::Mat& pred_depth, const cv::Mat& gt_depth,
+                                 const DepthEvalOptions& options);
+
+struct DepthEvalResult {
+  std::vector<std::string> names;          // evaluated file names, sorted
+  std::vector<DepthMetrics> per_image;     // same order as names
+  std::vector<std::string> skipped;        // files without any valid GT pixel (excluded from the mean)
+  DepthMetrics mean;                       // arithmetic mean over evaluated images
+};
+
+// Evaluates every *.png of gt_dir against the same name in pred_dir (KITTI
+// uint16 maps, value / 256). Throws dvso::Error naming the files when a folder
+// is empty, the names differ, or no image has a valid GT pixel.
+DepthEvalResult EvaluateDepthFolders(const std::string& pred_dir, const std::string& gt_dir,
+                                     const DepthEvalOptions& options);
+
+// Mean over the given per-image metrics (images with valid_pixels == 0 are ignored).
+DepthMetrics AverageDepthMetrics(const std::vector<DepthMetrics>& per_image);
+
+nlohmann::json DepthEvalResultToJson(const DepthEvalResult& result, const DepthEvalOptions& options);
+std::string FormatDepthEvalResult(const DepthEvalResult& result, const DepthEvalOptions& options);
+
+}  // namespace dvso
