@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "vo/frame/image_pyramid.h"
-#include "vo/frontend/residual_pattern.h"
+#include "vo/optimization/residual_pattern.h"
 
 namespace dvso::vo {
 

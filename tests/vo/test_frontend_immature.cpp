@@ -1,0 +1,95 @@
+#include <gtest/gtest.h>
+
+#include "core/lie.h"
+#include "tests/vo/frontend_test_scene.h"
+#include "vo/frontend/immature_point.h"
+#include "vo/frontend/pixel_selector.h"
+
+namespace dvso::vo {
+namespace {
+
+struct Scene {
+  testing::BoxScene box;
+  PinholeCamera cam = testing::TestCamera();
+  cv::Mat host_img, host_depth;
+  std::unique_ptr<ImagePyramid> host;
+  std::vector<SelectedPixel> pixels;
+  Scene() {
+    box.Render(cam, Eigen::Isometry3d::Identity(), &host_img, &host_depth);
+    host = std::make_unique<ImagePyramid>(host_img, cam);
+    PixelSelectorOptions sel;
+    sel.desired_points = 800;
+    pixels = SelectPixels(*host, sel);
+  }
+};
+
+TEST(FrontendImmature, StaticStereoMatchingRecoversDepth) {
+  Scene s;
+  const double baseline = 0.5;
+  Eigen::Isometry3d T_world_right = Eigen::Isometry3d::Identity();
+  T_world_right.translation().x() = baseline;
+  cv::Mat right_img;
+  s.box.Render(s.cam, T_world_right, &right_img, nullptr);
+  const ImagePyramid right(right_img, s.cam);
+  ImmaturePointOptions opt;
+  const Eigen::Vector3f Kt(static_cast<float>(-s.cam.fx * baseline), 0.f, 0.f);
+  int good = 0, accurate = 0, total = 0;
+  for (const auto& px : s.pixels) {
+    ImmaturePoint p;
+    if (!p.Initialize(s.host->level(0), 0, px.x, px.y, px.level)) continue;
+    ++total;
+    const auto status = p.Trace(right.level(0), Eigen::Matrix3f::Identity(), Kt, 1.f, 0.f, opt, 150.f);
+    if (status != TraceStatus::kGood) continue;
+    ++good;
+    const float true_idepth = 1.0f / s.host_depth.at<float>(px.y, px.x);
+    const float disp_err = std::fabs(p.IdepthEstimate() - true_idepth) * s.cam.fx * baseline;
+    if (disp_err < 0.5f) ++accurate;
+  }
+  ASSERT_GT(total, 400);
+  EXPECT_GT(good, 0.8 * total);
+  EXPECT_GT(accurate, 0.9 * good);
+}
+
+TEST(FrontendImmature, TemporalEpipolarSearchConvergesAndBracketsTruth) {
+  Scene s;
+  Vector6d xi;
+  xi << 0.3, 0.05, 0.2, 0.0, 0.02, 0.0;
+  const Eigen::Isometry3d T_world_target = ExpSE3(xi);
+  cv::Mat img;
+  s.box.Render(s.cam, T_world_target, &img, nullptr);
+  const ImagePyramid target(img, s.cam);
+  const Eigen::Isometry3d T_target_host = T_world_target.inverse();
+  const Eigen::Matrix3f K = s.cam.K().cast<float>();
+  const Eigen::Matrix3f KRKi = K * T_target_host.linear().cast<float>() * K.inverse();
+  const Eigen::Vector3f Kt = K * T_target_host.translation().cast<float>();
+  ImmaturePointOptions opt;
+  int ready = 0, bracketed = 0, total = 0;
+  for (const auto& px : s.pixels) {
+    ImmaturePoint p;
+    if (!p.Initialize(s.host->level(0), 0, px.x, px.y, px.level)) continue;
+    ++total;
+    p.Trace(target.level(0), KRKi, Kt, 1.f, 0.f, opt);
+    if (!p.ReadyForActivation(opt)) continue;
+    ++ready;
+    const float truth = 1.0f / s.host_depth.at<float>(px.y, px.x);
+    const float slack = 0.1f * (p.idepth_max - p.idepth_min) + 1e-3f;
+    if (truth >= p.idepth_min - slack && truth <= p.idepth_max + slack) ++bracketed;
+  }
+  ASSERT_GT(total, 400);
+  EXPECT_GT(ready, 0.3 * total);
+  EXPECT_GT(bracketed, 0.9 * ready);
+}
+
+TEST(FrontendImmature, PureRotationGivesNoDepthInformation) {
+  Scene s;
+  ImmaturePoint p;
+  ASSERT_TRUE(p.Initialize(s.host->level(0), 0, s.pixels[100].x, s.pixels[100].y, 0));
+  const Eigen::Matrix3f K = s.cam.K().cast<float>();
+  const Eigen::Matrix3f KRKi = K * ExpSO3(Eigen::Vector3d(0, 0.01, 0)).cast<float>() * K.inverse();
+  EXPECT_EQ(p.Trace(s.host->level(0), KRKi, Eigen::Vector3f::Zero(), 1.f, 0.f, ImmaturePointOptions{}),
+            TraceStatus::kBadCondition);
+  EXPECT_FALSE(p.HasFiniteInterval());
+}
+
+}  // namespace
+}  // namespace dvso::vo
