@@ -65,10 +65,27 @@ std::string DepthCropName(DepthCrop crop) {
 void DepthEvalOptions::Check() const {
   Require(std::isfinite(min_depth) && min_depth > 0.0, "eval-depth: min_depth must be > 0");
   Require(std::isfinite(max_depth) && max_depth > min_depth, "eval-depth: max_depth must be > min_depth");
+  Require(std::isfinite(fxb) && fxb >= 0.0, "eval-depth: fxb must be >= 0");
+  Require(!(kitti_focal_by_width && fxb > 0.0), "eval-depth: give either fxb or kitti_focal_by_width, not both");
   if (pred_kind == MapKind::kDisparity || gt_kind == MapKind::kDisparity) {
-    Require(std::isfinite(fxb) && fxb > 0.0,
-            "eval-depth: disparity maps need focal length * baseline (--fxb or --calib) to become depths");
+    Require(fxb > 0.0 || kitti_focal_by_width,
+            "eval-depth: disparity maps need focal length * baseline (--fxb, --calib or --kitti-focal) "
+            "to become depths");
   }
+}
+
+double KittiFocalLengthForWidth(int width) {
+  // P_rect_02[0][0] of the five KITTI raw calibration days.
+  switch (width) {
+    case 1242: return 721.5377;
+    case 1241: return 718.856;
+    case 1224: return 707.0493;
+    case 1238: return 718.3351;
+    case 1226: return 708.2046;
+    default: break;
+  }
+  throw Error("no KITTI focal length known for image width " + std::to_string(width) +
+              " (known: 1224, 1226, 1238, 1241, 1242); give --fxb instead");
 }
 
 cv::Rect DepthCropRegion(DepthCrop crop, int width, int height) {
@@ -240,11 +257,19 @@ DepthEvalResult EvaluateDepthFolders(const std::string& pred_dir, const std::str
     const std::string gt_path = JoinPath(gt_dir, name);
     const std::string pred_path = JoinPath(pred_dir, name);
     const cv::Mat gt_map = ReadKittiMapPng(gt_path);
+    double fxb = options.fxb;
+    if (options.kitti_focal_by_width) {
+      try {
+        fxb = KittiFocalLengthForWidth(gt_map.cols) * kKittiStereoBaseline;
+      } catch (const Error& e) {
+        throw Error(gt_path, e.what());
+      }
+    }
     const cv::Mat pred_map = ResizePrediction(ReadKittiMapPng(pred_path), options.pred_kind, gt_map.size());
     const cv::Mat gt_depth =
-        options.gt_kind == MapKind::kDisparity ? DisparityToDepth(gt_map, options.fxb, 0.0f) : gt_map;
+        options.gt_kind == MapKind::kDisparity ? DisparityToDepth(gt_map, fxb, 0.0f) : gt_map;
     const cv::Mat pred_depth = options.pred_kind == MapKind::kDisparity
-                                   ? DisparityToDepth(pred_map, options.fxb, std::numeric_limits<float>::infinity())
+                                   ? DisparityToDepth(pred_map, fxb, std::numeric_limits<float>::infinity())
                                    : pred_map;
     DepthMetrics metrics;
     try {
@@ -288,6 +313,7 @@ nlohmann::json DepthEvalResultToJson(const DepthEvalResult& result, const DepthE
   j["pred_kind"] = MapKindName(options.pred_kind);
   j["gt_kind"] = MapKindName(options.gt_kind);
   if (options.fxb > 0.0) j["fxb"] = options.fxb;
+  if (options.kitti_focal_by_width) j["fxb"] = "KITTI focal length by width x 0.54 m";
   nlohmann::json per_image = nlohmann::json::array();
   for (size_t i = 0; i < result.names.size(); ++i) {
     nlohmann::json entry = MetricsToJson(result.per_image[i], options.median_scaling);

@@ -24,6 +24,7 @@ struct DepthEvalOptions {
   MapKind pred_kind = MapKind::kDisparity;  // predictions: disparity (px) or depth (m)
   MapKind gt_kind = MapKind::kDisparity;    // ground truth: disparity (px, KITTI disp_occ) or depth (m)
   double fxb = 0.0;            // focal length (px, at GT resolution) * baseline (m); needed for disparities
+  bool kitti_focal_by_width = false;  // instead of fxb: KITTI focal length from the GT width, baseline 0.54 m
   DepthCrop crop = DepthCrop::kNone;  // evaluation crop of Eigen et al. or Garg et al. (fractions of GT size)
   double min_depth = 1e-3;     // GT kept when > min_depth; predictions clamped up to it (m)
   double max_depth = 80.0;     // GT kept when < max_depth; predictions clamped down to it (m)
@@ -44,6 +45,12 @@ struct DepthMetrics {
   long valid_pixels = 0;  // pixels evaluated (sum over images for aggregates)
   double scale = 1.0;     // median-scaling factor applied (1 without; mean over images for aggregates)
 };
+
+// KITTI rectified focal length (px) of the raw-data calibration days, keyed by
+// image width (the table monodepth uses for the KITTI 2015 training images).
+// Throws dvso::Error for any other width.
+double KittiFocalLengthForWidth(int width);
+constexpr double kKittiStereoBaseline = 0.54;  // metres, the value monodepth's evaluation uses
 
 // Rows [floor(r0 H), floor(r1 H)), columns [floor(c0 W), floor(c1 W)) with the
 // crop fractions of monodepth's evaluation; the whole image for kNone.

@@ -24,7 +24,8 @@ void Run(EvalDepthArgs& args) {
   args.options.gt_kind = ParseMapKind(args.gt_kind);
   args.options.crop = ParseDepthCrop(args.crop);
   if (!args.calib_path.empty()) {
-    Require(args.options.fxb <= 0.0, "give either --fxb or --calib, not both");
+    Require(args.options.fxb <= 0.0 && !args.options.kitti_focal_by_width,
+            "give only one of --fxb, --calib and --kitti-focal");
     // Image size does not enter fx * baseline; KITTI's 1241 x 376 keeps Check() satisfied.
     args.options.fxb = ReadKittiCalibration(args.calib_path, 1241, 376).FxB();
   }
@@ -33,6 +34,7 @@ void Run(EvalDepthArgs& args) {
     std::cout << "predictions  : " << args.pred_dir << " (" << MapKindName(args.options.pred_kind) << ")\n"
               << "ground truth : " << args.gt_dir << " (" << MapKindName(args.options.gt_kind) << ")\n";
     if (args.options.fxb > 0.0) std::cout << "fx * baseline: " << args.options.fxb << " px m\n";
+    if (args.options.kitti_focal_by_width) std::cout << "fx * baseline: KITTI fx by image width x 0.54 m\n";
     std::cout << "\n";
   }
   const DepthEvalResult result = EvaluateDepthFolders(args.pred_dir, args.gt_dir, args.options);
@@ -59,6 +61,9 @@ void AddEvalDepthCommand(CLI::App& app) {
   auto* fxb = cmd->add_option("--fxb", args->options.fxb,
                               "focal length (px, GT resolution) * baseline (m) to turn disparity into depth");
   cmd->add_option("--calib", args->calib_path, "KITTI odometry calib.txt giving fx * baseline (P0, P1)")->excludes(fxb);
+  cmd->add_flag("--kitti-focal", args->options.kitti_focal_by_width,
+                "fx from the GT width (KITTI calibration days, as monodepth) times baseline 0.54 m")
+      ->excludes(fxb);
   cmd->add_option("--crop", args->crop, "evaluation crop: none, eigen or garg")->capture_default_str();
   cmd->add_option("--min-depth", args->options.min_depth, "GT kept above, predictions clamped to (m)")
       ->capture_default_str();

@@ -130,6 +130,17 @@ TEST(EvalDepth, OptionsCheck) {
   EXPECT_EQ(ParseDepthCrop("Garg"), DepthCrop::kGarg);
 }
 
+TEST(EvalDepth, KittiFocalByWidth) {
+  EXPECT_DOUBLE_EQ(KittiFocalLengthForWidth(1242), 721.5377);
+  EXPECT_DOUBLE_EQ(KittiFocalLengthForWidth(1224), 707.0493);
+  EXPECT_THROW(KittiFocalLengthForWidth(640), Error);
+  DepthEvalOptions o;
+  o.kitti_focal_by_width = true;
+  EXPECT_NO_THROW(o.Check());
+  o.fxb = 300.0;
+  EXPECT_THROW(o.Check(), Error);  // ambiguous
+}
+
 TEST(EvalDepth, AverageIsOverImagesNotPixels) {
   DepthMetrics a, b;
   a.abs_rel = 0.1;
