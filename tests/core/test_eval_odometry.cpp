@@ -10,6 +10,7 @@
 #include "core/error.h"
 #include "core/eval_odometry.h"
 #include "core/lie.h"
+#include "core/plot.h"
 #include "core/trajectory.h"
 
 namespace fs = std::filesystem;
@@ -273,6 +274,37 @@ TEST(EvalOdometry, WritesBothPlots) {
   EXPECT_EQ(top.cols, 900);
   EXPECT_EQ(segments.cols, 1300);
   fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace dvso
+
+namespace dvso {
+namespace {
+
+TEST(Plot, NiceTicksUseOneTwoFiveSteps) {
+  EXPECT_EQ(NiceTicks(0.0, 10.0, 5), (std::vector<double>{0, 2, 4, 6, 8, 10}));
+  const std::vector<double> ticks = NiceTicks(-0.37, 0.81, 8);  // raw step 0.1475 -> 0.2
+  ASSERT_EQ(ticks.size(), 6u);
+  EXPECT_NEAR(ticks.front(), -0.2, 1e-12);
+  EXPECT_NEAR(ticks.back(), 0.8, 1e-12);
+  EXPECT_EQ(ticks[1], 0.0);
+  EXPECT_TRUE(NiceTicks(1.0, 1.0, 5).empty());
+}
+
+TEST(Plot, RejectsEmptyOrInconsistentSeries) {
+  PlotSeries empty;
+  EXPECT_THROW(RenderPlot({empty}, PlotOptions{}), Error);
+  PlotSeries bad;
+  bad.x = {1, 2, 3};
+  bad.y = {1, 2};
+  EXPECT_THROW(RenderPlot({bad}, PlotOptions{}), Error);
+  PlotSeries ok;
+  ok.x = {0, 1, 2};
+  ok.y = {0, 1, NAN};
+  const cv::Mat image = RenderPlot({ok}, PlotOptions{});
+  EXPECT_EQ(image.type(), CV_8UC3);
+  EXPECT_EQ(image.size(), cv::Size(900, 700));
 }
 
 }  // namespace
