@@ -26,8 +26,11 @@ std::vector<double> NiceTicks(double lo, double hi, int target_count) {
     step = factor * magnitude;
     if (step >= raw_step) break;
   }
-  const double first = std::ceil(lo / step - 1e-9) * step;
-  for (double t = first; t <= hi + 1e-9 * step; t += step) ticks.push_back(std::abs(t) < 1e-12 * step ? 0.0 : t);
+  // Index-based so that a step below the resolution of lo cannot loop forever.
+  const double first_index = std::ceil(lo / step - 1e-9);
+  const double last_index = std::floor(hi / step + 1e-9);
+  if (!(last_index - first_index < 1000.0)) return ticks;
+  for (double k = first_index; k <= last_index; k += 1.0) ticks.push_back(k == 0.0 ? 0.0 : k * step);
   return ticks;
 }
 
