@@ -187,7 +187,9 @@ OdometryMetrics EvaluateOdometry(const Trajectory& gt, const Trajectory& est,
   m.est_frames = static_cast<int>(est.size());
   m.matched_frames = static_cast<int>(a.gt_xyz.size());
   for (size_t i = 0; i < gt.size(); ++i) {
-    if (a.match[i] < 0) m.missing_frames.push_back(static_cast<int>(i));
+    if (a.match[i] >= 0) continue;
+    m.missing_frames.push_back(static_cast<int>(i));
+    m.missing_timestamps.push_back(gt.poses[i].timestamp);
   }
   m.unmatched_est_frames = m.est_frames - m.matched_frames;
   m.alignment = UmeyamaAlignment(a.est_xyz, a.gt_xyz, options.align);
@@ -326,6 +328,7 @@ nlohmann::json OdometryMetricsToJson(const OdometryMetrics& m) {
   j["matched_frames"] = m.matched_frames;
   j["missing_frames"] = m.missing_frames.size();
   j["missing_frame_indices"] = m.missing_frames;
+  j["missing_frame_timestamps"] = m.missing_timestamps;
   j["unmatched_est_frames"] = m.unmatched_est_frames;
   j["gt_path_length"] = m.gt_path_length;
   j["est_path_length"] = m.est_path_length;

@@ -44,6 +44,7 @@ struct OdometryMetrics {
   int est_frames = 0;              // poses in the estimate
   int matched_frames = 0;          // GT poses with an associated estimated pose
   std::vector<int> missing_frames; // GT frame indices without an estimated pose
+  std::vector<double> missing_timestamps;  // their GT timestamps (frame index for plain KITTI files)
   int unmatched_est_frames = 0;    // estimated poses matching no GT pose
 
   // KITTI protocol (on the aligned estimate when align != kNone).

@@ -193,6 +193,7 @@ TEST(EvalOdometry, MissingFramesAreReportedAndSkipped) {
   const nlohmann::json j = OdometryMetricsToJson(m);
   EXPECT_EQ(j["missing_frames"].get<int>(), static_cast<int>(expected.size()));
   EXPECT_EQ(j["missing_frame_indices"].get<std::vector<int>>(), expected);
+  EXPECT_EQ(j["missing_frame_timestamps"].get<std::vector<double>>().at(5), 500.0);
   EXPECT_NE(FormatOdometryMetrics(m).find("5-9, 500, 990-1000"), std::string::npos) << FormatOdometryMetrics(m);
 }
 
