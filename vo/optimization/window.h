@@ -113,6 +113,7 @@ struct Keyframe {
   ImagePyramidPtr left, right;
   cv::Mat right_disparity;
   std::vector<Point> points;            // active points hosted here
+  int num_points_added = 0;             // points ever activated here (for the DSO marginalisation rule)
 };
 
 // A point leaving the window with its host keyframe (for point clouds, labels).
@@ -161,8 +162,10 @@ class Window {
   // residual. Returns the number of removed points.
   int RemoveOutliers();
 
-  // Keyframes DSO would marginalise now so that at most max_keyframes - 1
-  // remain before the next one is added (distance heuristic of DSO). Never the newest.
+  // Keyframes DSO would marginalise now, never the newest: those that kept
+  // fewer than 5 % of their points, then (distance heuristic of DSO) as many
+  // as needed so that at most max_keyframes - 1 remain, leaving room for the
+  // next keyframe. Call after Optimize() of a new keyframe (DSO order).
   std::vector<int> KeyframesToMarginalize() const;
   // Marginalises keyframe `id`: its points (those with enough good residuals)
   // go into the prior through the Schur complement, then the keyframe's

@@ -1,0 +1,142 @@
+// Marginalisation of a keyframe (DSO): its points go into the prior through
+// the Schur complement on their inverse depths, then the keyframe's own
+// parameters are Schur-complemented out of the prior.
+//
+// Simplifications w.r.t. DSO (documented in vo_interface.md):
+//  - a hosted point is marginalised when it still has at least
+//    options.min_residuals_to_marginalize active temporal residuals,
+//    otherwise dropped (it carries no information on the remaining frames);
+//  - residuals of points hosted elsewhere that target the leaving keyframe are
+//    dropped (as DSO does), not marginalised; points left without residuals
+//    are removed.
+#include <algorithm>
+#include <cmath>
+
+#include "core/error.h"
+#include "vo/optimization/accumulator.h"
+#include "vo/optimization/marginalization.h"
+#include "vo/optimization/window.h"
+
+namespace dvso::vo {
+
+std::vector<MarginalizedPoint> Window::MarginalizeKeyframe(int id) {
+  int index = -1;
+  for (int i = 0; i < num_keyframes(); ++i) {
+    if (keyframes_[i].id == id) index = i;
+  }
+  Require(index >= 0, "window: MarginalizeKeyframe: no keyframe with id " + std::to_string(id));
+
+  // 1. States of the hosted points' residuals at the current estimate.
+  std::vector<PointRef> hosted = CollectPoints(keyframes_, index);
+  std::vector<MarginalizedPoint> leaving;
+  if (!hosted.empty()) {
+    WindowLinearizer probe(&keyframes_, camera_, options_);
+    probe.Linearize(hosted);
+    std::vector<PointRef> informative;
+    for (const PointRef& ref : hosted) {
+      const Point& p = keyframes_[index].points[ref.point_index];
+      int good = 0;
+      for (const Residual& r : p.residuals) {
+        good += r.kind == ResidualKind::kTemporal && r.state == ResidualState::kActive;
+      }
+      MarginalizedPoint out;
+      out.host_id = id;
+      out.u = p.u;
+      out.v = p.v;
+      out.idepth = p.idepth;
+      out.num_residuals = good;
+      const Eigen::Vector3d ray = camera_.left.Unproject(p.u, p.v);
+      out.world = keyframes_[index].world_to_camera.inverse() * (ray / std::max(p.idepth, options_.min_idepth));
+      leaving.push_back(out);
+      if (good >= options_.min_residuals_to_marginalize) informative.push_back(ref);
+    }
+    // 2. Their information on the frames, depths eliminated (Schur), linearised
+    //    at the current state, re-expanded around the first estimates.
+    if (!informative.empty()) {
+      WindowLinearizer linearizer(&keyframes_, camera_, options_);
+      linearizer.Linearize(informative);
+      Eigen::MatrixXd H;
+      Eigen::VectorXd b;
+      linearizer.Reduce(0.0, Eigen::MatrixXd(), Eigen::VectorXd(), &H, &b);
+      AddToPrior(H, b, FirstEstimateDifference(keyframes_), &prior_H_, &prior_b_);
+    }
+  }
+
+  // 3. The leaving keyframe's own absolute priors (gauge, affine) join the prior.
+  {
+    Matrix8d H_abs;
+    Vector8d b_abs;
+    double unused = 0.0;
+    AbsoluteFramePrior(keyframes_[index], &H_abs, &b_abs, &unused);
+    const Eigen::VectorXd dx = FirstEstimateDifference(keyframes_);
+    const int o = kFrameParams * index;
+    prior_H_.block<8, 8>(o, o) += H_abs;
+    prior_b_.segment<8>(o) += b_abs - H_abs * dx.segment<8>(o);
+  }
+
+  // 4. Schur complement of the keyframe's parameters out of the prior.
+  MarginalizeBlock(kFrameParams * index, kFrameParams, &prior_H_, &prior_b_);
+
+  // 5. Drop the keyframe, its points, and all residuals into it.
+  keyframes_.erase(keyframes_.begin() + index);
+  for (Keyframe& kf : keyframes_) {
+    for (Point& p : kf.points) {
+      p.residuals.erase(std::remove_if(p.residuals.begin(), p.residuals.end(),
+                                       [id](const Residual& r) {
+                                         return r.kind == ResidualKind::kTemporal && r.target_id == id;
+                                       }),
+                        p.residuals.end());
+    }
+    kf.points.erase(std::remove_if(kf.points.begin(), kf.points.end(),
+                                   [](const Point& p) { return p.residuals.empty(); }),
+                    kf.points.end());
+  }
+  return leaving;
+}
+
+std::vector<int> Window::KeyframesToMarginalize() const {
+  std::vector<int> result;
+  const int n = num_keyframes();
+  if (n < 2) return result;
+  std::vector<bool> flagged(n, false);
+  int remaining = n;
+  // Keyframes that lost almost all their points (DSO: < 5 % left).
+  for (int i = 0; i + 1 < n; ++i) {
+    const Keyframe& kf = keyframes_[i];
+    if (kf.num_points_added > 0 && kf.points.size() < 0.05 * kf.num_points_added) {
+      flagged[i] = true;
+      --remaining;
+    }
+  }
+  // Distance heuristic (DSO): keep keyframes spread out in space while
+  // keeping those close to the newest; score_i = sqrt(d(i, newest)) *
+  // sum_j 1 / (d(i, j) + eps), the largest score leaves first.
+  const Eigen::Isometry3d& newest = keyframes_.back().world_to_camera;
+  while (remaining > options_.max_keyframes - 1) {
+    int best = -1;
+    double best_score = -1.0;
+    for (int i = 0; i + 1 < n; ++i) {
+      if (flagged[i]) continue;
+      const Eigen::Isometry3d& Ti = keyframes_[i].world_to_camera;
+      double sum = 0.0;
+      for (int j = 0; j + 1 < n; ++j) {
+        if (j == i || flagged[j]) continue;
+        sum += 1.0 / ((Ti * keyframes_[j].world_to_camera.inverse()).translation().norm() + 1e-5);
+      }
+      const double score = std::sqrt((Ti * newest.inverse()).translation().norm() + 1e-5) * sum;
+      if (score > best_score) {
+        best_score = score;
+        best = i;
+      }
+    }
+    if (best < 0) break;
+    flagged[best] = true;
+    --remaining;
+  }
+  for (int i = 0; i < n; ++i) {
+    if (flagged[i]) result.push_back(keyframes_[i].id);
+  }
+  return result;
+}
+
+}  // namespace dvso::vo
