@@ -38,7 +38,11 @@ bool ImmaturePoint::Initialize(const PyramidLevel& host, int host_id_in, float u
 }
 
 bool ImmaturePoint::ReadyForActivation(const ImmaturePointOptions& options) const {
-  return last_status == TraceStatus::kGood && HasFiniteInterval() && idepth_min >= 0 &&
+  // DSO activatePointsMT: a skipped / badly conditioned last search keeps the
+  // interval of the previous good one.
+  const bool status_ok = last_status == TraceStatus::kGood || last_status == TraceStatus::kSkipped ||
+                         last_status == TraceStatus::kBadCondition;
+  return status_ok && HasFiniteInterval() && idepth_min >= 0 &&
          last_pixel_interval < options.max_pixel_interval && quality > options.min_quality;
 }
 

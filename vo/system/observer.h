@@ -1,0 +1,77 @@
+// Events the odometry System emits. Observers (trajectory writer, run log,
+// point cloud, label writer of sdso_labels/) receive data; nothing reaches
+// into the optimiser to pull it out. All methods default to no-ops.
+// Frame indices are the input frame indices given to System::ProcessFrame;
+// keyframes are identified by the frame index they were created from.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <string>
+#include <vector>
+
+namespace dvso::vo {
+
+enum class FrameStatus {
+  kTracked,       // tracked against the reference keyframe
+  kKeyframe,      // tracked (or initialised) and made a keyframe
+  kInitializing,  // waiting for (mono) initialisation: pose is a placeholder
+  kLost,          // tracking failed: pose is the best available prediction
+};
+std::string ToString(FrameStatus status);
+
+struct FrameEvent {
+  int frame_index = 0;
+  double timestamp = 0;
+  FrameStatus status = FrameStatus::kTracked;
+  Eigen::Isometry3d T_world_camera = Eigen::Isometry3d::Identity();  // current estimate
+  // Pose relative to the reference keyframe (refined later by the window):
+  // T_world_camera = T_world_ref * T_ref_frame. reference_frame_index = -1 when
+  // the pose is not attached to a keyframe (lost / initialising frames).
+  int reference_frame_index = -1;
+  Eigen::Isometry3d T_ref_frame = Eigen::Isometry3d::Identity();
+  int segment = 0;             // increments at every (re-)initialisation after a loss
+  double tracking_rmse = 0;
+  int hypotheses_tried = 0;
+  double track_ms = 0;         // pyramid + tracking
+  double total_ms = 0;         // everything for this frame (incl. keyframe work)
+  double optimize_ms = 0;      // windowed optimisation (keyframes only)
+  int window_keyframes = 0;
+  int active_points = 0;
+  int immature_points = 0;
+};
+
+struct PointInfo {
+  int host_frame_index = -1;
+  float u = 0, v = 0;          // host pixel, level 0
+  double idepth = 0;           // inverse depth in the host camera
+  Eigen::Vector3d world = Eigen::Vector3d::Zero();
+  int num_good_residuals = 0;  // temporal residuals in the active state at the last evaluation
+  int num_residuals = 0;       // all residuals (incl. stereo kinds)
+};
+
+struct KeyframeInfo {
+  int frame_index = -1;
+  Eigen::Isometry3d T_world_camera = Eigen::Isometry3d::Identity();
+  double affine_a = 0, affine_b = 0;
+};
+
+struct WindowEvent {
+  int frame_index = -1;                 // the keyframe that triggered the optimisation
+  std::vector<KeyframeInfo> keyframes;  // oldest first
+  std::vector<PointInfo> points;        // all active points
+};
+
+class OdometryObserver {
+ public:
+  virtual ~OdometryObserver() = default;
+  virtual void OnFrameTracked(const FrameEvent& /*event*/) {}
+  virtual void OnWindowOptimized(const WindowEvent& /*event*/) {}
+  virtual void OnPointsMarginalized(const std::vector<PointInfo>& /*points*/) {}
+  virtual void OnKeyframeMarginalized(const KeyframeInfo& /*keyframe*/) {}
+  // Tracking was lost at frame_index; the window is discarded (its keyframes
+  // were reported through OnKeyframeMarginalized before).
+  virtual void OnReset(int /*frame_index*/) {}
+  virtual void OnFinished() {}
+};
+
+}  // namespace dvso::vo

@@ -1,0 +1,44 @@
+#include "vo/system/odometry_options.h"
+
+#include "core/error.h"
+
+namespace dvso::vo {
+
+OdometryMode ParseOdometryMode(const std::string& text) {
+  if (text == "mono") return OdometryMode::kMono;
+  if (text == "stereo") return OdometryMode::kStereo;
+  throw Error("unknown odometry mode '" + text + "' (expected mono or stereo)");
+}
+
+std::string ToString(OdometryMode mode) { return mode == OdometryMode::kMono ? "mono" : "stereo"; }
+
+void OdometryOptions::Check() const {
+  Require(active_points >= 10, "active_points must be >= 10");
+  Require(optimization_iterations >= 0, "optimization_iterations must be >= 0");
+  Require(stereo_max_disparity_fraction > 0 && stereo_max_disparity_fraction <= 1,
+          "stereo_max_disparity_fraction must be in (0, 1]");
+  Require(min_activation_distance >= 1, "min_activation_distance must be >= 1");
+  Require(max_consecutive_lost >= 1, "max_consecutive_lost must be >= 1");
+  pyramid.Check();
+  selector.Check();
+  tracker.Check();
+  immature.Check();
+  keyframe.Check();
+  mono_init.Check();
+  window.Check();
+}
+
+OdometryOptions OdometryOptions::Preset(const std::string& name) {
+  OdometryOptions o;
+  if (name == "default") return o;
+  if (name == "fast") {
+    o.active_points = 800;
+    o.selector.desired_points = 600;
+    o.optimization_iterations = 4;
+    o.tracker.max_iterations_coarse = 20;
+    return o;
+  }
+  throw Error("unknown odometry preset '" + name + "' (expected default or fast)");
+}
+
+}  // namespace dvso::vo

@@ -1,0 +1,59 @@
+// All options of the odometry System in one struct, with DSO's defaults
+// (Engel et al. 2017; Stereo DSO, Wang et al. 2017). Loaded from YAML with
+// strict keys (odometry_options_yaml.cpp); presets "default" and "fast".
+#pragma once
+
+#include <string>
+
+#include "vo/frame/image_pyramid.h"
+#include "vo/frontend/coarse_tracker.h"
+#include "vo/frontend/immature_point.h"
+#include "vo/frontend/keyframe_decision.h"
+#include "vo/frontend/mono_initializer.h"
+#include "vo/frontend/pixel_selector.h"
+#include "vo/optimization/window.h"
+
+namespace dvso::vo {
+
+enum class OdometryMode { kMono, kStereo };
+
+OdometryMode ParseOdometryMode(const std::string& text);  // "mono" | "stereo"; throws dvso::Error
+std::string ToString(OdometryMode mode);
+
+struct OdometryOptions {
+  int active_points = 2000;           // desired active points in the window (DSO setting_desiredPointDensity)
+  int optimization_iterations = 6;    // LM iterations per keyframe (DSO setting_maxOptIterations)
+  bool bundle_adjustment = true;      // run the windowed optimisation (off: poses from tracking only, for diagnosis)
+  double stereo_max_disparity_fraction = 0.2;  // static stereo search length, fraction of the image width
+  double min_activation_distance = 2.0;  // lower bound of the adaptive activation grid cell (pixels)
+  bool reinitialize_on_loss = true;   // tracking failure -> start a new map (else the run stops)
+  int max_consecutive_lost = 1000000; // give up (error) after this many consecutive lost frames
+  std::string gamma_file;             // optional inverse response (DSO pcalib.txt), empty = none
+  std::string vignette_file;          // optional vignette PNG, empty = none
+
+  ImagePyramidOptions pyramid;
+  PixelSelectorOptions selector;      // candidate (immature) points per keyframe (DSO desiredImmatureDensity 1500)
+  CoarseTrackerOptions tracker;
+  ImmaturePointOptions immature;
+  KeyframeDecisionOptions keyframe;
+  MonoInitializerOptions mono_init;
+  WindowOptions window;
+
+  OdometryOptions() { selector.desired_points = 1500; }
+
+  // Throws dvso::Error on any invalid value (checks every sub-struct).
+  void Check() const;
+
+  // Presets: "default" (DSO: 2000 active points, 1500 candidates per keyframe)
+  // and "fast" (800 active points, 600 candidates, fewer iterations).
+  static OdometryOptions Preset(const std::string& name);
+};
+
+// Strict YAML: every key must be known (unknown key = dvso::Error naming it).
+// Keys absent from the file keep the values of `base`.
+OdometryOptions LoadOdometryOptions(const std::string& path, const OdometryOptions& base = OdometryOptions{});
+OdometryOptions OdometryOptionsFromYamlString(const std::string& text, const OdometryOptions& base = OdometryOptions{});
+std::string OdometryOptionsToYaml(const OdometryOptions& options);
+void SaveOdometryOptions(const std::string& path, const OdometryOptions& options);
+
+}  // namespace dvso::vo

@@ -1,0 +1,252 @@
+// System: per-frame flow (initialisation, tracking, loss handling).
+// Keyframe work (window, candidates, activation, marginalisation) is in
+// system_keyframes.cpp.
+#include "vo/system/system.h"
+
+#include <chrono>
+
+#include "core/error.h"
+#include "vo/frontend/keyframe_decision.h"
+#include "vo/optimization/window.h"
+
+namespace dvso::vo {
+
+namespace {
+double MsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+}  // namespace
+
+std::string ToString(FrameStatus status) {
+  switch (status) {
+    case FrameStatus::kTracked: return "tracked";
+    case FrameStatus::kKeyframe: return "keyframe";
+    case FrameStatus::kInitializing: return "initializing";
+    case FrameStatus::kLost: return "lost";
+  }
+  return "unknown";
+}
+
+System::System(const OdometryOptions& options, const StereoCamera& camera, OdometryMode mode)
+    : options_(options), camera_(camera), mode_(mode), tracker_(options.tracker) {
+  options_.Check();
+  camera_.left.Check();
+  if (mode_ == OdometryMode::kStereo) Require(camera_.baseline > 0, "stereo odometry needs a baseline > 0");
+  if (!options_.gamma_file.empty() || !options_.vignette_file.empty()) {
+    calibration_ = std::make_unique<PhotometricCalibration>(
+        PhotometricCalibration::Load(options_.gamma_file, options_.vignette_file));
+  }
+  activation_cell_ = std::sqrt(static_cast<double>(camera_.left.width) * camera_.left.height / options_.active_points);
+}
+
+System::~System() = default;
+
+void System::AddObserver(OdometryObserver* observer) {
+  Require(observer != nullptr, "System::AddObserver: null observer");
+  observers_.push_back(observer);
+}
+
+ImagePyramidPtr System::MakePyramid(const cv::Mat& image) const {
+  return std::make_shared<ImagePyramid>(image, camera_.left, options_.pyramid, calibration_.get());
+}
+
+Eigen::Isometry3d System::ReferenceWorldToCamera() const {
+  const Keyframe* ref = window_ ? window_->FindKeyframe(reference_id_) : nullptr;
+  Require(ref != nullptr, "System: tracking reference keyframe missing");
+  return ref->world_to_camera;
+}
+
+FrameEvent System::ProcessFrame(int frame_index, double timestamp, const cv::Mat& left, const cv::Mat& right) {
+  Require(!finished_, "System::ProcessFrame after Finish");
+  if (mode_ == OdometryMode::kStereo) {
+    Require(!right.empty(), "stereo odometry: frame " + std::to_string(frame_index) + " has no right image");
+  }
+  const auto start = std::chrono::steady_clock::now();
+  FrameEvent ev;
+  ev.frame_index = frame_index;
+  ev.timestamp = timestamp;
+  const ImagePyramidPtr pyr = MakePyramid(left);
+
+  if (!initialized_) {
+    if (mode_ == OdometryMode::kStereo) {
+      InitializeStereo(frame_index, pyr, right, last_T_world_camera_);
+      ev.status = FrameStatus::kKeyframe;
+      ev.reference_frame_index = frame_index;
+      ev.T_world_camera = last_T_world_camera_;
+    } else if (StepMonoInitialization(frame_index, pyr)) {
+      // The frame became the second keyframe of the new map.
+      MakeKeyframe(frame_index, pyr, cv::Mat(), mono_second_T_cw_, mono_second_a_, mono_second_b_, &ev);
+      ev.status = FrameStatus::kKeyframe;
+      ev.reference_frame_index = frame_index;
+      ev.T_world_camera = window_->CameraToWorld(frame_index);
+    } else {
+      ev.status = FrameStatus::kInitializing;
+      ev.reference_frame_index = mono_init_first_index_;
+      ev.T_ref_frame = mono_init_->T_last_first().inverse();
+      ev.T_world_camera = segment_origin_ * ev.T_ref_frame;
+    }
+  } else {
+    TrackFrame(frame_index, pyr, right, &ev);
+  }
+  ev.segment = segment_;
+  ev.track_ms = ev.track_ms > 0 ? ev.track_ms : MsSince(start);
+  ev.total_ms = MsSince(start);
+  if (window_) {
+    ev.window_keyframes = window_->num_keyframes();
+    ev.active_points = window_->num_points();
+  }
+  for (const auto& c : candidates_) ev.immature_points += static_cast<int>(c.points.size());
+  last_T_world_camera_ = ev.T_world_camera;
+  for (OdometryObserver* o : observers_) o->OnFrameTracked(ev);
+  return ev;
+}
+
+void System::TrackFrame(int frame_index, const ImagePyramidPtr& pyr, const cv::Mat& right, FrameEvent* ev) {
+  const auto start = std::chrono::steady_clock::now();
+  const auto guesses = CoarseTracker::MotionHypotheses(T_last_ref_, velocity_);
+  const TrackingResult result = tracker_.TrackWithHypotheses(*pyr, guesses, last_a_, last_b_, last_rmse_);
+  ev->track_ms = MsSince(start);
+  ev->tracking_rmse = result.rmse;
+  ev->hypotheses_tried = result.hypotheses_tried;
+  if (!result.success) {
+    // Best available pose: constant-velocity prediction from the last frame.
+    const Eigen::Isometry3d predicted = last_T_world_camera_ * velocity_.inverse();
+    ev->status = FrameStatus::kLost;
+    ev->T_world_camera = predicted;
+    ++consecutive_lost_;
+    Require(options_.reinitialize_on_loss, "tracking lost at frame " + std::to_string(frame_index) +
+                                               " (reinitialize_on_loss is off)");
+    Require(consecutive_lost_ <= options_.max_consecutive_lost,
+            "tracking lost for " + std::to_string(consecutive_lost_) + " consecutive frames");
+    ResetAfterLoss(frame_index, predicted);
+    if (mode_ == OdometryMode::kStereo) {
+      // Stereo re-initialises at once from this frame (metric depth from the pair).
+      InitializeStereo(frame_index, pyr, right, predicted);
+      ev->reference_frame_index = frame_index;
+    } else {
+      StepMonoInitialization(frame_index, pyr);  // this frame becomes the new first frame
+      ev->reference_frame_index = frame_index;
+    }
+    return;
+  }
+  consecutive_lost_ = 0;
+  velocity_ = result.T_new_ref * T_last_ref_.inverse();
+  T_last_ref_ = result.T_new_ref;
+  last_a_ = result.affine_a;
+  last_b_ = result.affine_b;
+  if (first_rmse_ <= 0) first_rmse_ = result.rmse;
+  last_rmse_ = result.rmse;
+
+  const Keyframe* ref = window_->FindKeyframe(reference_id_);
+  const Eigen::Isometry3d T_new_cw = result.T_new_ref * ref->world_to_camera;
+  // Absolute affine parameters (window convention I_j - b_j = e^{a_j - a_i} (I_i - b_i))
+  // from the tracker's relative transfer I_new = e^{a} I_ref + b.
+  const double a_new = ref->a + result.affine_a;
+  const double b_new = result.affine_b + std::exp(result.affine_a) * ref->b;
+  TraceCandidates(*pyr, T_new_cw, a_new, b_new);
+  ++frames_since_keyframe_;
+
+  ev->status = FrameStatus::kTracked;
+  ev->reference_frame_index = reference_id_;
+  ev->T_ref_frame = result.T_new_ref.inverse();
+  ev->T_world_camera = T_new_cw.inverse();
+
+  KeyframeDecisionInput decision;
+  decision.tracking = &result;
+  decision.image_width = camera_.left.width;
+  decision.image_height = camera_.left.height;
+  decision.first_rmse = first_rmse_;
+  decision.frames_since_keyframe = frames_since_keyframe_;
+  if (NeedKeyframe(decision, options_.keyframe)) {
+    MakeKeyframe(frame_index, pyr, right, T_new_cw, a_new, b_new, ev);
+    ev->status = FrameStatus::kKeyframe;
+    ev->reference_frame_index = frame_index;
+    ev->T_ref_frame = Eigen::Isometry3d::Identity();
+    ev->T_world_camera = window_->CameraToWorld(frame_index);
+  }
+}
+
+void System::InitializeStereo(int frame_index, const ImagePyramidPtr& left, const cv::Mat& right,
+                              const Eigen::Isometry3d& T_world_camera) {
+  window_ = std::make_unique<Window>(options_.window, camera_);
+  candidates_.clear();
+  const ImagePyramidPtr right_pyr = MakePyramid(right);
+  KeyframeInput input;
+  input.id = frame_index;
+  input.world_to_camera = T_world_camera.inverse();
+  input.left = left;
+  input.right = right_pyr;
+  window_->AddKeyframe(input);
+  AddCandidates(frame_index, *left, right_pyr.get());
+  // The first keyframe's stereo-matched candidates are activated at once
+  // (Stereo DSO: metric depth from the static stereo match).
+  ActivateCandidates(frame_index, /*include_new_keyframe=*/true);
+  FrameEvent unused;
+  RunOptimization(&unused);
+  ++num_keyframes_total_;
+  SetTrackingReference(frame_index);
+  initialized_ = true;
+  EmitWindowEvent(frame_index);
+}
+
+bool System::StepMonoInitialization(int frame_index, const ImagePyramidPtr& left) {
+  if (!mono_init_ || !mono_init_->has_first_frame() || mono_init_->failed()) {
+    mono_init_ = std::make_unique<MonoInitializer>(options_.mono_init, options_.selector, options_.tracker);
+    mono_init_->SetFirstFrame(left);
+    mono_init_first_index_ = frame_index;
+    segment_origin_ = last_T_world_camera_;
+    return false;
+  }
+  if (!mono_init_->AddFrame(*left)) {
+    if (mono_init_->failed()) {
+      // Start over with this frame as the first one.
+      const Eigen::Isometry3d pose = segment_origin_ * mono_init_->T_last_first().inverse();
+      mono_init_->SetFirstFrame(left);
+      mono_init_first_index_ = frame_index;
+      segment_origin_ = pose;
+    }
+    return false;
+  }
+  const MonoInitialization& r = mono_init_->result();
+  window_ = std::make_unique<Window>(options_.window, camera_);
+  candidates_.clear();
+  KeyframeInput input;
+  input.id = mono_init_first_index_;
+  input.world_to_camera = segment_origin_.inverse();
+  input.left = mono_init_->first_frame();
+  window_->AddKeyframe(input);
+  for (const ReferencePoint& p : r.points) window_->AddPoint(input.id, p.u, p.v, p.idepth);
+  ++num_keyframes_total_;
+  mono_second_T_cw_ = r.T_last_first * input.world_to_camera;
+  mono_second_a_ = r.affine_a;
+  mono_second_b_ = r.affine_b;
+  initialized_ = true;
+  mono_init_.reset();
+  return true;
+}
+
+void System::ResetAfterLoss(int frame_index, const Eigen::Isometry3d& predicted) {
+  FlushWindow();
+  for (OdometryObserver* o : observers_) o->OnReset(frame_index);
+  window_.reset();
+  candidates_.clear();
+  tracker_ = CoarseTracker(options_.tracker);
+  mono_init_.reset();
+  initialized_ = false;
+  ++segment_;
+  reference_id_ = -1;
+  T_last_ref_ = velocity_ = Eigen::Isometry3d::Identity();
+  last_a_ = last_b_ = first_rmse_ = last_rmse_ = 0;
+  frames_since_keyframe_ = 0;
+  last_T_world_camera_ = predicted;
+  segment_origin_ = predicted;
+}
+
+void System::Finish() {
+  if (finished_) return;
+  finished_ = true;
+  FlushWindow();
+  for (OdometryObserver* o : observers_) o->OnFinished();
+}
+
+}  // namespace dvso::vo

@@ -1,0 +1,102 @@
+// The odometry System (DSO's FullSystem): drives, per input frame, the
+// pyramid, the coarse tracker against the newest keyframe, the tracing of
+// candidate points, the keyframe decision and, for keyframes, the windowed
+// bundle adjustment (vo/optimization Window) with marginalisation. Frames are
+// streamed: nothing but the window and per-frame bookkeeping is kept, so
+// memory stays flat over long sequences. Tracking loss re-initialises and
+// continues; every frame is reported to the observers.
+#pragma once
+
+#include <memory>
+#include <opencv2/core.hpp>
+#include <vector>
+
+#include "core/camera.h"
+#include "vo/frame/photometric_calibration.h"
+#include "vo/frontend/coarse_tracker.h"
+#include "vo/frontend/immature_point.h"
+#include "vo/frontend/mono_initializer.h"
+#include "vo/system/observer.h"
+#include "vo/optimization/window.h"
+#include "vo/system/odometry_options.h"
+
+namespace dvso::vo {
+
+class System {
+ public:
+  // `camera`: rectified intrinsics and baseline (baseline unused in mono).
+  System(const OdometryOptions& options, const StereoCamera& camera, OdometryMode mode);
+  ~System();
+
+  void AddObserver(OdometryObserver* observer);  // non-owning; must outlive the System
+
+  // Processes one frame (CV_8UC1 left; right required in stereo mode). Frames
+  // must come in increasing index order. Returns the event sent to observers.
+  FrameEvent ProcessFrame(int frame_index, double timestamp, const cv::Mat& left, const cv::Mat& right = cv::Mat());
+
+  // Marginalises what is left (reports final keyframe poses and points) and
+  // calls OnFinished. Idempotent.
+  void Finish();
+
+  int num_keyframes_total() const { return num_keyframes_total_; }
+  int num_resets() const { return segment_; }
+  const OdometryOptions& options() const { return options_; }
+
+ private:
+  struct KeyframeCandidates {
+    int keyframe_id = -1;
+    std::vector<ImmaturePoint> points;
+  };
+
+  ImagePyramidPtr MakePyramid(const cv::Mat& image) const;
+  void InitializeStereo(int frame_index, const ImagePyramidPtr& left, const cv::Mat& right,
+                        const Eigen::Isometry3d& T_world_camera);
+  bool StepMonoInitialization(int frame_index, const ImagePyramidPtr& left);
+  void MakeKeyframe(int frame_index, const ImagePyramidPtr& left, const cv::Mat& right,
+                    const Eigen::Isometry3d& T_cw, double a, double b, FrameEvent* event);
+  void TraceCandidates(const ImagePyramid& frame, const Eigen::Isometry3d& T_frame_w, double a, double b);
+  void ActivateCandidates(int new_keyframe_id, bool include_new_keyframe);
+  void AddCandidates(int keyframe_id, const ImagePyramid& left, const ImagePyramid* right);
+  void RunOptimization(FrameEvent* event);
+  void MarginalizeKeyframes();
+  void SetTrackingReference(int keyframe_id);
+  void EmitWindowEvent(int frame_index);
+  void ResetAfterLoss(int frame_index, const Eigen::Isometry3d& predicted);
+  void TrackFrame(int frame_index, const ImagePyramidPtr& pyr, const cv::Mat& right, FrameEvent* event);
+  // Reports every keyframe (oldest first) and its points as marginalised.
+  void FlushWindow();
+  PointInfo MakePointInfo(const Keyframe& host, const Point& point) const;
+  Eigen::Isometry3d ReferenceWorldToCamera() const;
+
+  OdometryOptions options_;
+  StereoCamera camera_;
+  OdometryMode mode_;
+  std::unique_ptr<PhotometricCalibration> calibration_;
+  std::vector<OdometryObserver*> observers_;
+
+  std::unique_ptr<Window> window_;
+  std::vector<KeyframeCandidates> candidates_;
+  CoarseTracker tracker_;
+  std::unique_ptr<MonoInitializer> mono_init_;
+  int mono_init_first_index_ = -1;
+
+  bool initialized_ = false;
+  bool finished_ = false;
+  int segment_ = 0;
+  int num_keyframes_total_ = 0;
+  int consecutive_lost_ = 0;
+  int frames_since_keyframe_ = 0;
+  double first_rmse_ = 0;        // rmse of the first frame tracked against the current reference
+  double last_rmse_ = 0;
+  double activation_cell_ = 0;   // adaptive activation grid cell (pixels)
+  int reference_id_ = -1;        // keyframe id the tracker uses
+  Eigen::Isometry3d T_last_ref_ = Eigen::Isometry3d::Identity();   // last frame <- reference
+  Eigen::Isometry3d velocity_ = Eigen::Isometry3d::Identity();     // last frame <- previous frame
+  double last_a_ = 0, last_b_ = 0;                                  // relative to the reference
+  Eigen::Isometry3d last_T_world_camera_ = Eigen::Isometry3d::Identity();  // pose of the last reported frame
+  Eigen::Isometry3d segment_origin_ = Eigen::Isometry3d::Identity();       // pose given to a new map's first keyframe
+  Eigen::Isometry3d mono_second_T_cw_ = Eigen::Isometry3d::Identity();     // mono init: second keyframe pose
+  double mono_second_a_ = 0, mono_second_b_ = 0;
+};
+
+}  // namespace dvso::vo

@@ -1,0 +1,254 @@
+// System: keyframe work — window insertion, candidate (immature) points,
+// activation, windowed optimisation, marginalisation and window events.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "core/error.h"
+#include "vo/frontend/pixel_selector.h"
+#include "vo/system/system.h"
+
+namespace dvso::vo {
+
+namespace {
+
+// Pixel-to-pixel mapping host -> target at level 0: p_t ~ KRKi p_h + Kt idepth.
+struct PixelTransfer {
+  Eigen::Matrix3f KRKi;
+  Eigen::Vector3f Kt;
+};
+
+PixelTransfer MakeTransfer(const PinholeCamera& cam, const Eigen::Isometry3d& T_target_host) {
+  const Eigen::Matrix3d K = cam.K();
+  PixelTransfer t;
+  t.KRKi = (K * T_target_host.linear() * K.inverse()).cast<float>();
+  t.Kt = (K * T_target_host.translation()).cast<float>();
+  return t;
+}
+
+}  // namespace
+
+void System::MakeKeyframe(int frame_index, const ImagePyramidPtr& left, const cv::Mat& right,
+                          const Eigen::Isometry3d& T_cw, double a, double b, FrameEvent* event) {
+  ImagePyramidPtr right_pyr;
+  if (mode_ == OdometryMode::kStereo && !right.empty()) right_pyr = MakePyramid(right);
+  KeyframeInput input;
+  input.id = frame_index;
+  input.world_to_camera = T_cw;
+  input.a = a;
+  input.b = b;
+  input.left = left;
+  input.right = right_pyr;
+  window_->AddKeyframe(input);
+  ActivateCandidates(frame_index, /*include_new_keyframe=*/false);
+  RunOptimization(event);
+  MarginalizeKeyframes();
+  AddCandidates(frame_index, *left, right_pyr.get());
+  ++num_keyframes_total_;
+  SetTrackingReference(frame_index);
+  EmitWindowEvent(frame_index);
+}
+
+void System::TraceCandidates(const ImagePyramid& frame, const Eigen::Isometry3d& T_frame_w, double a, double b) {
+  for (KeyframeCandidates& c : candidates_) {
+    const Keyframe* host = window_->FindKeyframe(c.keyframe_id);
+    if (host == nullptr) continue;
+    const PixelTransfer tr = MakeTransfer(camera_.left, T_frame_w * host->world_to_camera.inverse());
+    const float ratio = static_cast<float>(std::exp(a - host->a));
+    const float offset = static_cast<float>(b - ratio * host->b);
+    for (ImmaturePoint& p : c.points) p.Trace(frame.level(0), tr.KRKi, tr.Kt, ratio, offset, options_.immature);
+  }
+}
+
+void System::AddCandidates(int keyframe_id, const ImagePyramid& left, const ImagePyramid* right) {
+  KeyframeCandidates c;
+  c.keyframe_id = keyframe_id;
+  const std::vector<SelectedPixel> pixels = SelectPixels(left, options_.selector);
+  c.points.reserve(pixels.size());
+  const Eigen::Vector3f stereo_Kt(static_cast<float>(-camera_.FxB()), 0.f, 0.f);
+  const float max_disparity = static_cast<float>(options_.stereo_max_disparity_fraction * camera_.left.width);
+  for (const SelectedPixel& px : pixels) {
+    ImmaturePoint p;
+    if (!p.Initialize(left.level(0), keyframe_id, static_cast<float>(px.x), static_cast<float>(px.y), px.level)) {
+      continue;
+    }
+    if (right != nullptr) {
+      // Static stereo: the right image shares the keyframe's affine parameters.
+      const TraceStatus s = p.Trace(right->level(0), Eigen::Matrix3f::Identity(), stereo_Kt, 1.f, 0.f,
+                                    options_.immature, max_disparity);
+      if (s == TraceStatus::kOutOfBounds) continue;
+      if (s != TraceStatus::kGood) {
+        // No usable stereo match: keep it as a plain candidate for temporal tracing.
+        p.idepth_min = 0;
+        p.idepth_max = std::numeric_limits<float>::infinity();
+        p.last_status = TraceStatus::kUninitialized;
+        p.quality = 10000.f;
+      }
+    }
+    c.points.push_back(p);
+  }
+  candidates_.push_back(std::move(c));
+}
+
+void System::ActivateCandidates(int new_keyframe_id, bool include_new_keyframe) {
+  const Keyframe* newest = window_->FindKeyframe(new_keyframe_id);
+  Require(newest != nullptr, "System: new keyframe missing in the window");
+  const PinholeCamera& cam = camera_.left;
+  const double cell = std::max(options_.min_activation_distance, activation_cell_);
+  const int gw = static_cast<int>(std::ceil(cam.width / cell));
+  const int gh = static_cast<int>(std::ceil(cam.height / cell));
+  std::vector<uint8_t> occupied(static_cast<size_t>(gw) * gh, 0);
+  auto cell_of = [&](double u, double v) -> int {
+    if (u < 0 || v < 0 || u >= cam.width || v >= cam.height) return -1;
+    return static_cast<int>(v / cell) * gw + static_cast<int>(u / cell);
+  };
+  // Existing active points, projected into the new keyframe, occupy their cells
+  // (DSO's distance map: new points only where there are none yet).
+  for (int k = 0; k < window_->num_keyframes(); ++k) {
+    const Keyframe& kf = window_->keyframe(k);
+    const Eigen::Isometry3d T_new_host = newest->world_to_camera * kf.world_to_camera.inverse();
+    for (const Point& p : kf.points) {
+      const Eigen::Vector3d X = T_new_host * (cam.Unproject(p.u, p.v) / p.idepth);
+      if (X.z() <= 0) continue;
+      const Eigen::Vector2d uv = cam.Project(X);
+      const int c = cell_of(uv.x(), uv.y());
+      if (c >= 0) occupied[c] = 1;
+    }
+  }
+  for (KeyframeCandidates& c : candidates_) {
+    if (c.keyframe_id == new_keyframe_id && !include_new_keyframe) continue;
+    const Keyframe* host = window_->FindKeyframe(c.keyframe_id);
+    if (host == nullptr) continue;
+    const Eigen::Isometry3d T_new_host = newest->world_to_camera * host->world_to_camera.inverse();
+    std::vector<ImmaturePoint> keep;
+    keep.reserve(c.points.size());
+    for (ImmaturePoint& p : c.points) {
+      if (p.last_status == TraceStatus::kOutOfBounds) continue;  // dropped
+      if (!p.ReadyForActivation(options_.immature)) {
+        keep.push_back(p);
+        continue;
+      }
+      const double idepth = p.IdepthEstimate();
+      const Eigen::Vector3d X = T_new_host * (cam.Unproject(p.u, p.v) / idepth);
+      if (X.z() <= 0) continue;  // behind the newest camera: useless
+      const Eigen::Vector2d uv = cam.Project(X);
+      const int cidx = cell_of(uv.x(), uv.y());
+      if (cidx < 0) continue;  // left the field of view: drop (DSO drops OOB candidates)
+      if (occupied[cidx]) {
+        keep.push_back(p);
+        continue;
+      }
+      if (window_->AddPoint(c.keyframe_id, p.u, p.v, idepth) >= 0) occupied[cidx] = 1;
+    }
+    c.points.swap(keep);
+  }
+  // Adapt the activation grid so the window holds about active_points points (DSO currentMinActDist).
+  const int n = window_->num_points();
+  if (n < 0.66 * options_.active_points) activation_cell_ *= 0.8;
+  if (n > 1.25 * options_.active_points) activation_cell_ *= 1.2;
+  activation_cell_ = std::min(100.0, std::max(options_.min_activation_distance, activation_cell_));
+}
+
+void System::RunOptimization(FrameEvent* event) {
+  if (!options_.bundle_adjustment || options_.optimization_iterations == 0 || window_->num_points() == 0) return;
+  const auto start = std::chrono::steady_clock::now();
+  window_->Optimize(options_.optimization_iterations);
+  window_->RemoveOutliers();
+  event->optimize_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
+PointInfo System::MakePointInfo(const Keyframe& host, const Point& point) const {
+  PointInfo info;
+  info.host_frame_index = host.id;
+  info.u = point.u;
+  info.v = point.v;
+  info.idepth = point.idepth;
+  info.world = host.world_to_camera.inverse() * (camera_.left.Unproject(point.u, point.v) / point.idepth);
+  info.num_residuals = static_cast<int>(point.residuals.size());
+  for (const Residual& r : point.residuals) {
+    if (r.kind == ResidualKind::kTemporal && r.state == ResidualState::kActive) ++info.num_good_residuals;
+  }
+  return info;
+}
+
+void System::MarginalizeKeyframes() {
+  for (int id : window_->KeyframesToMarginalize()) {
+    const Keyframe* kf = window_->FindKeyframe(id);
+    if (kf == nullptr) continue;
+    const KeyframeInfo info{id, kf->world_to_camera.inverse(), kf->a, kf->b};
+    const std::vector<MarginalizedPoint> leaving = window_->MarginalizeKeyframe(id);
+    if (!observers_.empty()) {
+      std::vector<PointInfo> points;
+      points.reserve(leaving.size());
+      for (const MarginalizedPoint& m : leaving) {
+        PointInfo p;
+        p.host_frame_index = m.host_id;
+        p.u = m.u;
+        p.v = m.v;
+        p.idepth = m.idepth;
+        p.world = m.world;
+        p.num_good_residuals = m.num_residuals;
+        p.num_residuals = m.num_residuals;
+        points.push_back(p);
+      }
+      for (OdometryObserver* o : observers_) o->OnPointsMarginalized(points);
+      for (OdometryObserver* o : observers_) o->OnKeyframeMarginalized(info);
+    }
+    candidates_.erase(std::remove_if(candidates_.begin(), candidates_.end(),
+                                     [id](const KeyframeCandidates& c) { return c.keyframe_id == id; }),
+                      candidates_.end());
+  }
+}
+
+void System::SetTrackingReference(int keyframe_id) {
+  const Keyframe* ref = window_->FindKeyframe(keyframe_id);
+  Require(ref != nullptr, "System: reference keyframe missing");
+  const PinholeCamera& cam = camera_.left;
+  std::vector<ReferencePoint> points;
+  points.reserve(window_->num_points());
+  for (int k = 0; k < window_->num_keyframes(); ++k) {
+    const Keyframe& kf = window_->keyframe(k);
+    const Eigen::Isometry3d T_ref_host = ref->world_to_camera * kf.world_to_camera.inverse();
+    for (const Point& p : kf.points) {
+      const Eigen::Vector3d X = T_ref_host * (cam.Unproject(p.u, p.v) / p.idepth);
+      if (X.z() <= 1e-3) continue;
+      const Eigen::Vector2d uv = cam.Project(X);
+      if (!cam.InImage(uv.x(), uv.y(), 2.0)) continue;
+      points.push_back({static_cast<float>(uv.x()), static_cast<float>(uv.y()), static_cast<float>(1.0 / X.z())});
+    }
+  }
+  tracker_.SetReference(ref->left, points);
+  reference_id_ = keyframe_id;
+  T_last_ref_ = Eigen::Isometry3d::Identity();
+  last_a_ = last_b_ = 0;
+  first_rmse_ = last_rmse_ = 0;
+  frames_since_keyframe_ = 0;
+}
+
+void System::EmitWindowEvent(int frame_index) {
+  if (observers_.empty()) return;
+  WindowEvent ev;
+  ev.frame_index = frame_index;
+  for (int k = 0; k < window_->num_keyframes(); ++k) {
+    const Keyframe& kf = window_->keyframe(k);
+    ev.keyframes.push_back({kf.id, kf.world_to_camera.inverse(), kf.a, kf.b});
+    for (const Point& p : kf.points) ev.points.push_back(MakePointInfo(kf, p));
+  }
+  for (OdometryObserver* o : observers_) o->OnWindowOptimized(ev);
+}
+
+void System::FlushWindow() {
+  if (!window_) return;
+  for (int k = 0; k < window_->num_keyframes(); ++k) {
+    const Keyframe& kf = window_->keyframe(k);
+    if (!observers_.empty()) {
+      std::vector<PointInfo> points;
+      for (const Point& p : kf.points) points.push_back(MakePointInfo(kf, p));
+      const KeyframeInfo info{kf.id, kf.world_to_camera.inverse(), kf.a, kf.b};
+      for (OdometryObserver* o : observers_) o->OnPointsMarginalized(points);
+      for (OdometryObserver* o : observers_) o->OnKeyframeMarginalized(info);
+    }
+  }
+}
+
+}  // namespace dvso::vo
