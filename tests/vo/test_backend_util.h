@@ -5,6 +5,7 @@
 #include <Eigen/Geometry>
 #include <cmath>
 #include <functional>
+#include <map>
 #include <memory>
 #include <opencv2/core.hpp>
 #include <random>
@@ -13,6 +14,7 @@
 #include "core/camera.h"
 #include "core/lie.h"
 #include "vo/frame/image_pyramid.h"
+#include "vo/optimization/window.h"
 
 namespace dvso::vo::testing {
 
@@ -91,6 +93,87 @@ inline Eigen::Isometry3d TruePose(int i) {
   T_wc.translation() = Eigen::Vector3d(0.15 * i, -0.03 * i, 0.35 * i);
   T_wc.linear() = ExpSO3(Eigen::Vector3d(0.004 * i, -0.012 * i, 0.003 * i));
   return T_wc.inverse();  // world-to-camera
+}
+
+}  // namespace dvso::vo::testing
+
+namespace dvso::vo::testing {
+
+// A window over the plane scene: keyframes at TruePose(0..n-1) (optionally
+// perturbed), points on a grid of well-textured pixels hosted in the first
+// `num_hosts` keyframes with their true inverse depths (optionally perturbed).
+struct SceneWindow {
+  StereoCamera camera;
+  std::unique_ptr<Window> window;
+  std::vector<Eigen::Isometry3d> true_world_to_camera;
+  std::map<int, double> true_idepth;  // point id -> inverse depth
+};
+
+struct SceneWindowSpec {
+  int num_keyframes = 4;
+  int num_hosts = 2;
+  int grid_step = 12;                 // pixel spacing of candidate points
+  bool stereo = false;                // right images (static stereo)
+  bool virtual_stereo = false;        // D^R from the true right depth
+  double pose_noise_t = 0.0;          // metres, per component (keyframes > 0)
+  double pose_noise_r = 0.0;          // radians, per component (keyframes > 0)
+  double idepth_noise = 0.0;          // relative
+  double scale = 1.0;                 // initial translations and depths scaled by this (mono gauge)
+  unsigned seed = 1;
+  int width = 320, height = 240;
+};
+
+inline SceneWindow BuildSceneWindow(const WindowOptions& options, const SceneWindowSpec& spec) {
+  SceneWindow sw;
+  sw.camera.left = SmallCamera(spec.width, spec.height);
+  sw.camera.baseline = 0.5;
+  sw.window = std::make_unique<Window>(options, sw.camera);
+  const PlaneScene scene;
+  std::mt19937 rng(spec.seed);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  for (int i = 0; i < spec.num_keyframes; ++i) {
+    const Eigen::Isometry3d T = TruePose(i);
+    sw.true_world_to_camera.push_back(T);
+    KeyframeInput in;
+    in.id = 10 * i;
+    const cv::Mat image = scene.Render(T, sw.camera.left);
+    in.left = MakePyramid(image, sw.camera.left);
+    Eigen::Isometry3d right_T = T;
+    right_T.translation().x() -= sw.camera.baseline;  // right camera at +B along x
+    if (spec.stereo) in.right = MakePyramid(scene.Render(right_T, sw.camera.left), sw.camera.left);
+    if (spec.virtual_stereo) {
+      in.right_disparity = cv::Mat(spec.height, spec.width, CV_32FC1);
+      for (int y = 0; y < spec.height; ++y)
+        for (int x = 0; x < spec.width; ++x)
+          in.right_disparity.at<float>(y, x) =
+              static_cast<float>(sw.camera.FxB() / scene.DepthAt(right_T, sw.camera.left, x, y));
+    }
+    Eigen::Isometry3d T0 = T;
+    T0.translation() *= spec.scale;
+    if (i > 0) {
+      Vector6d xi;
+      for (int k = 0; k < 3; ++k) xi(k) = spec.pose_noise_t * normal(rng);
+      for (int k = 3; k < 6; ++k) xi(k) = spec.pose_noise_r * normal(rng);
+      T0 = ExpSE3(xi) * T0;
+    }
+    in.world_to_camera = T0;
+    sw.window->AddKeyframe(in);
+  }
+  for (int h = 0; h < spec.num_hosts; ++h) {
+    const Keyframe& host = sw.window->keyframe(h);
+    const PyramidLevel& level = host.left->level(0);
+    for (int y = 16; y < spec.height - 16; y += spec.grid_step) {
+      for (int x = 16; x < spec.width - 16; x += spec.grid_step) {
+        if (level.GradSq(x, y) < 25.0f) continue;
+        const double z = scene.DepthAt(sw.true_world_to_camera[h], sw.camera.left, x, y);
+        const double d = 1.0 / z;
+        const double d0 = d * std::max(0.3, 1.0 + spec.idepth_noise * normal(rng)) / spec.scale;
+        const int id = sw.window->AddPoint(host.id, static_cast<float>(x), static_cast<float>(y), d0);
+        if (id >= 0) sw.true_idepth[id] = d;
+      }
+    }
+  }
+  return sw;
 }
 
 }  // namespace dvso::vo::testing
