@@ -99,9 +99,10 @@ nlohmann::json OdometryMetricsToJson(const OdometryMetrics& metrics);
 // Human-readable multi-line table.
 std::string FormatOdometryMetrics(const OdometryMetrics& metrics);
 
-// Writes <dir>/trajectory_xz.png (top view, GT vs aligned estimate) and
-// <dir>/segment_errors.png (t_rel and r_rel per segment length).
-void WriteOdometryPlots(const std::string& dir, const Trajectory& gt, const Trajectory& aligned_est,
+// Writes <dir>/trajectory_xz.png (top view, GT vs aligned estimate) and, when
+// any KITTI segment was evaluated, <dir>/segment_errors.png (t_rel and r_rel per
+// segment length). Returns the paths written.
+std::vector<std::string> WriteOdometryPlots(const std::string& dir, const Trajectory& gt, const Trajectory& aligned_est,
                         const OdometryMetrics& metrics);
 
 }  // namespace dvso

@@ -10,7 +10,7 @@
 
 namespace dvso {
 
-void WriteOdometryPlots(const std::string& dir, const Trajectory& gt, const Trajectory& aligned_est,
+std::vector<std::string> WriteOdometryPlots(const std::string& dir, const Trajectory& gt, const Trajectory& aligned_est,
                         const OdometryMetrics& metrics) {
   EnsureDirectory(dir);
   const std::string est_label =
@@ -43,7 +43,8 @@ void WriteOdometryPlots(const std::string& dir, const Trajectory& gt, const Traj
   top_view.x_label = "x [m]";
   top_view.y_label = "z [m]";
   top_view.equal_aspect = true;
-  WritePlotPng(JoinPath(dir, "trajectory_xz.png"), {gt_series, est_series, start}, top_view);
+  std::vector<std::string> written = {JoinPath(dir, "trajectory_xz.png")};
+  WritePlotPng(written.back(), {gt_series, est_series, start}, top_view);
 
   // Error vs segment length: two panels side by side, as the devkit's plots.
   PlotSeries t_series, r_series;
@@ -59,11 +60,7 @@ void WriteOdometryPlots(const std::string& dir, const Trajectory& gt, const Traj
     r_series.y.push_back(b.r_rel);
   }
   const std::string segment_path = JoinPath(dir, "segment_errors.png");
-  if (t_series.x.empty()) {
-    throw Error(segment_path, "no KITTI segment could be evaluated (GT path " +
-                                  std::to_string(metrics.gt_path_length) +
-                                  " m is shorter than the shortest segment length); trajectory plot written");
-  }
+  if (t_series.x.empty()) return written;  // no segments: nothing to plot (the caller says so)
   PlotOptions panel;
   panel.width = 650;
   panel.height = 500;
@@ -80,6 +77,8 @@ void WriteOdometryPlots(const std::string& dir, const Trajectory& gt, const Traj
   WriteAtomically(segment_path, [&](const std::string& temp) {
     RequireFile(cv::imwrite(temp, both), segment_path, "cannot write PNG plot");
   });
+  written.push_back(segment_path);
+  return written;
 }
 
 }  // namespace dvso

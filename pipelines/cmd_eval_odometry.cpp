@@ -45,8 +45,11 @@ void Run(EvalOdometryArgs& args) {
     std::cout << FormatOdometryMetrics(metrics);
   }
   if (!args.plot_dir.empty()) {
-    WriteOdometryPlots(args.plot_dir, gt, AlignedMatchedEstimate(gt, est, args.options, metrics), metrics);
-    (args.json ? std::cerr : std::cout) << "plots written to " << args.plot_dir << "\n";
+    const std::vector<std::string> written =
+        WriteOdometryPlots(args.plot_dir, gt, AlignedMatchedEstimate(gt, est, args.options, metrics), metrics);
+    std::ostream& note = args.json ? std::cerr : std::cout;
+    for (const std::string& path : written) note << "plot written: " << path << "\n";
+    if (metrics.segments == 0) note << "no segment-error plot: the GT path is shorter than the shortest segment\n";
   }
 }
 

@@ -267,13 +267,21 @@ TEST(EvalOdometry, WritesBothPlots) {
   for (StampedPose& p : est.poses) p.T_world_camera.translation() *= 1.05;
   OdometryEvalOptions options;
   const OdometryMetrics m = EvaluateOdometry(gt, est, options);
-  WriteOdometryPlots(dir.string(), gt, AlignedMatchedEstimate(gt, est, options, m), m);
+  EXPECT_EQ(WriteOdometryPlots(dir.string(), gt, AlignedMatchedEstimate(gt, est, options, m), m).size(), 2u);
   const cv::Mat top = cv::imread((dir / "trajectory_xz.png").string());
   const cv::Mat segments = cv::imread((dir / "segment_errors.png").string());
   ASSERT_FALSE(top.empty());
   ASSERT_FALSE(segments.empty());
   EXPECT_EQ(top.cols, 900);
   EXPECT_EQ(segments.cols, 1300);
+  // A GT path below 100 m has no segments: only the top view is written.
+  fs::remove_all(dir);
+  const Trajectory short_gt = StraightLine(50);
+  const OdometryMetrics short_m = EvaluateOdometry(short_gt, short_gt, options);
+  const auto written = WriteOdometryPlots(dir.string(), short_gt, short_gt, short_m);
+  ASSERT_EQ(written.size(), 1u);
+  EXPECT_TRUE(fs::exists(dir / "trajectory_xz.png"));
+  EXPECT_FALSE(fs::exists(dir / "segment_errors.png"));
   fs::remove_all(dir);
 }
 
