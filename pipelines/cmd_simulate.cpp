@@ -1,14 +1,101 @@
-// PLACEHOLDER until the owning issue lands: registers `dvso simulate` so the CLI
-// lists it, and fails loudly when run.
+// `dvso simulate`: renders a synthetic KITTI-like stereo sequence with exact
+// ground truth (core/simulator.h; docs/simulator.md).
+#include <iostream>
+#include <memory>
+
 #include "core/error.h"
+#include "core/simulator.h"
 #include "pipelines/commands.h"
 
 namespace dvso::cli {
 
+namespace {
+
+struct SimulateArgs {
+  std::string output_dir;
+  int width = 0, height = 0;  // 0 = KITTI size
+  double fx = 0, fy = 0, cx = -1, cy = -1, baseline = 0;  // 0 / -1 = KITTI (scaled with the size)
+  bool no_exposure = false, no_vignetting = false, no_noise = false, quiet = false;
+  SimulatorOptions options;
+};
+
+void Run(SimulateArgs& args) {
+  SimulatorOptions& o = args.options;
+  const PinholeCamera kitti;
+  if (args.width > 0 || args.height > 0) {
+    Require(args.width > 0 && args.height > 0, "give both --width and --height");
+    o.camera = StereoCamera{kitti, o.camera.baseline}.Resized(args.width, args.height);
+  }
+  if (args.fx > 0) o.camera.left.fx = args.fx;
+  if (args.fy > 0) o.camera.left.fy = args.fy;
+  if (args.cx >= 0) o.camera.left.cx = args.cx;
+  if (args.cy >= 0) o.camera.left.cy = args.cy;
+  if (args.baseline > 0) o.camera.baseline = args.baseline;
+  Require(args.fx >= 0 && args.fy >= 0 && args.baseline >= 0, "--fx, --fy and --baseline must be positive");
+  o.exposure_drift = !args.no_exposure;
+  o.vignetting = !args.no_vignetting;
+  o.noise = !args.no_noise;
+  o.Check();
+  const auto& c = o.camera.left;
+  std::cout << "output      : " << args.output_dir << "\n"
+            << "trajectory  : " << (o.trajectory_path.empty() ? "generated driving path" : o.trajectory_path)
+            << " (first " << o.first_frame << ", count " << o.num_frames << ", stride " << o.stride << ")\n"
+            << "camera      : " << c.width << "x" << c.height << " fx " << c.fx << " fy " << c.fy << " cx " << c.cx
+            << " cy " << c.cy << " baseline " << o.camera.baseline << " m, height " << o.camera_height << " m\n"
+            << "photometric : exposure drift " << (o.exposure_drift ? "on" : "off") << ", vignetting "
+            << (o.vignetting ? "on" : "off") << ", noise " << (o.noise ? "sigma " + std::to_string(o.noise_sigma) : "off")
+            << "\n"
+            << "world       : seed " << o.seed << ", buildings " << o.scene.building_density << ", cars "
+            << o.scene.car_density << ", trees " << o.scene.tree_density << ", colour " << (o.color ? "on" : "off")
+            << ", threads " << o.num_threads << "\n";
+  const SimulationSummary summary = WriteSimulatedSequence(o, args.output_dir, !args.quiet);
+  std::cout << "wrote " << summary.frames << " frames (" << summary.path_length << " m) in " << summary.seconds
+            << " s: " << summary.frames / std::max(summary.seconds, 1e-9) << " frames/s\n";
+}
+
+}  // namespace
+
 void AddSimulateCommand(CLI::App& app) {
-  auto* cmd = app.add_subcommand("simulate", "Render a synthetic KITTI-like stereo sequence with exact ground truth (not implemented yet)");
-  cmd->allow_extras();
-  cmd->callback([] { throw Error("'dvso simulate' is not implemented yet"); });
+  auto args = std::make_shared<SimulateArgs>();
+  auto* cmd = app.add_subcommand(
+      "simulate", "Render a synthetic KITTI-like stereo sequence with exact ground truth (KITTI odometry layout)");
+  SimulatorOptions& o = args->options;
+  cmd->add_option("--out,-o", args->output_dir, "output folder (KITTI odometry layout)")->required();
+  cmd->add_option("--trajectory", o.trajectory_path,
+                  "KITTI pose file to follow (e.g. data/kitti_poses/00.txt); default: a generated driving path")
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--first", o.first_frame, "first trajectory pose to render")->capture_default_str();
+  cmd->add_option("--count", o.num_frames, "number of frames (-1: until the end of the trajectory)")
+      ->capture_default_str();
+  cmd->add_option("--stride", o.stride, "use every n-th pose")->capture_default_str();
+  cmd->add_option("--seed", o.seed, "seed of the world, textures, exposure and noise")->capture_default_str();
+  cmd->add_option("--speed", o.generated_speed, "speed of the generated path (m/s)")->capture_default_str();
+  cmd->add_option("--width", args->width, "image width (intrinsics scaled from KITTI 00-02)");
+  cmd->add_option("--height", args->height, "image height (intrinsics scaled from KITTI 00-02)");
+  cmd->add_option("--fx", args->fx, "focal length x (px), overrides");
+  cmd->add_option("--fy", args->fy, "focal length y (px), overrides");
+  cmd->add_option("--cx", args->cx, "principal point x (px), overrides");
+  cmd->add_option("--cy", args->cy, "principal point y (px), overrides");
+  cmd->add_option("--baseline", args->baseline, "stereo baseline (m), default 0.537");
+  cmd->add_option("--camera-height", o.camera_height, "camera height above the road (m)")->capture_default_str();
+  cmd->add_flag("--no-exposure-drift", args->no_exposure, "constant exposure (no per-frame gain/bias drift)");
+  cmd->add_option("--exposure-sigma", o.exposure_sigma, "per-frame log-gain random-walk std")->capture_default_str();
+  cmd->add_flag("--no-vignetting", args->no_vignetting, "no vignetting");
+  cmd->add_option("--vignetting", o.vignetting_strength, "vignetting fall-off at the corners (0..1)")
+      ->capture_default_str();
+  cmd->add_flag("--no-noise", args->no_noise, "no sensor noise");
+  cmd->add_option("--noise-sigma", o.noise_sigma, "sensor noise std (grey levels)")->capture_default_str();
+  cmd->add_flag("--color", o.color, "also write colour images image_2/ image_3/");
+  cmd->add_option("--building-density", o.scene.building_density, "fraction of the street lined by buildings")
+      ->capture_default_str();
+  cmd->add_option("--car-density", o.scene.car_density, "fraction of parking lanes with cars")->capture_default_str();
+  cmd->add_option("--tree-density", o.scene.tree_density, "relative amount of vegetation")->capture_default_str();
+  cmd->add_option("--max-distance", o.max_distance, "drawing distance (m)")->capture_default_str();
+  cmd->add_option("--threads", o.num_threads, "render threads")->capture_default_str();
+  cmd->add_option("--texture-size", o.texture_size, "procedural texture resolution (power of two)")
+      ->capture_default_str();
+  cmd->add_flag("--quiet", args->quiet, "no progress bar");
+  cmd->callback([args] { Run(*args); });
 }
 
 }  // namespace dvso::cli

@@ -1,0 +1,100 @@
+// `dvso simulate`: a synthetic KITTI-like stereo world with exact ground
+// truth. A procedural street (road with markings, curbs, sidewalks, facades
+// with gaps, parked cars, poles, signs, trees, sky) is laid along a KITTI
+// trajectory or a generated driving path and rendered for a rectified stereo
+// camera (KITTI 00-02 intrinsics by default), with per-frame exposure drift,
+// vignetting and sensor noise. Output: the KITTI odometry layout plus
+// poses.txt, depth_0/, disp_0/ and disp_1/ (see docs/simulator.md).
+#pragma once
+
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <memory>
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "core/camera.h"
+#include "core/simulator_render.h"
+#include "core/simulator_scene.h"
+
+namespace dvso {
+
+struct SimulatorOptions {
+  std::string trajectory_path;      // KITTI pose file (camera-to-world); empty = generated driving path
+  int first_frame = 0;              // index of the first trajectory pose rendered
+  int num_frames = 300;             // frames to render; -1 = until the end of the trajectory
+  int stride = 1;                   // use every stride-th pose
+  double generated_speed = 10.0;    // m/s of the generated path (no trajectory file)
+  uint64_t seed = 1;                // world layout, textures, exposure and noise
+  StereoCamera camera;              // rectified stereo camera (KITTI 00-02 defaults)
+  double camera_height = 1.65;      // camera height above the road (m, KITTI)
+  double frame_interval = 0.1;      // seconds between trajectory poses (times.txt)
+  double max_distance = 300.0;      // nothing farther than this is drawn (m)
+  sim::SceneOptions scene;          // densities of buildings, cars, trees
+  bool exposure_drift = true;       // per-frame affine brightness drift (DSO's a, b)
+  double exposure_sigma = 0.03;     // std of the per-frame log-gain random-walk step
+  double exposure_max = 0.35;       // bound on |log gain|
+  double bias_sigma = 0.6;          // std of the per-frame bias random-walk step (grey levels)
+  bool vignetting = true;           // radial fall-off V(r) = 1 - strength (r / r_corner)^2
+  double vignetting_strength = 0.3; // fall-off at the image corners
+  bool noise = true;                // additive Gaussian sensor noise
+  double noise_sigma = 1.5;         // noise std (grey levels)
+  bool color = false;               // also render image_2/ image_3/ (colour)
+  int num_threads = 2;              // render threads
+  int texture_size = 512;           // procedural texture resolution (power of two)
+
+  // Throws dvso::Error naming the offending option.
+  void Check() const;
+};
+
+// One rendered stereo frame with its ground truth.
+struct SimulatedFrame {
+  int index = 0;                  // output frame index (0-based)
+  int pose_index = 0;             // index into the trajectory
+  double timestamp = 0;           // seconds
+  Eigen::Isometry3d T_world_camera = Eigen::Isometry3d::Identity();  // trajectory frame
+  Eigen::Isometry3d T_first_camera = Eigen::Isometry3d::Identity();  // relative to output frame 0 (poses.txt)
+  sim::Photometric photometric;   // exposure of this frame (left view)
+  sim::RenderedView left, right;  // images and depth (0 = sky)
+  cv::Mat disparity_left;         // CV_32F, fx*b/depth of the left view (0 = sky); right x = left x - d
+  cv::Mat disparity_right;        // CV_32F, the right view's own disparity: left x = right x + d
+};
+
+class StreetSimulator {
+ public:
+  explicit StreetSimulator(const SimulatorOptions& options);
+  ~StreetSimulator();
+
+  int num_frames() const { return static_cast<int>(frame_poses_.size()); }
+  const SimulatorOptions& options() const { return options_; }
+  const StereoCamera& camera() const { return options_.camera; }
+  const sim::Scene& scene() const { return scene_; }
+  // Renders output frame i (0 <= i < num_frames()); thread-safe, deterministic.
+  SimulatedFrame Render(int i) const;
+  // Exposure of output frame i.
+  sim::Photometric Exposure(int i, int view) const;
+
+ private:
+  SimulatorOptions options_;
+  std::vector<int> frame_poses_;                  // trajectory index of each output frame
+  std::vector<Eigen::Isometry3d> trajectory_;     // all poses, camera-to-world
+  std::vector<double> log_gain_, bias_;           // per output frame
+  std::unique_ptr<sim::StreetPath> path_;
+  std::unique_ptr<sim::TextureBank> textures_;
+  sim::Scene scene_;
+  std::unique_ptr<sim::Renderer> renderer_;
+};
+
+struct SimulationSummary {
+  int frames = 0;          // frames written
+  double seconds = 0;      // wall time of rendering and writing
+  double path_length = 0;  // metres driven between the first and last frame
+};
+
+// Renders all frames and writes the KITTI odometry layout into output_dir,
+// frame by frame (each file atomically). Prints a progress bar when asked.
+SimulationSummary WriteSimulatedSequence(const SimulatorOptions& options, const std::string& output_dir,
+                                         bool show_progress);
+
+}  // namespace dvso

@@ -1,0 +1,210 @@
+#include "core/simulator_path.h"
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include "core/error.h"
+#include "core/lie.h"
+
+namespace dvso::sim {
+
+StreetPath::StreetPath(const std::vector<Eigen::Isometry3d>& poses, double camera_height, double spacing,
+                       double extension)
+    : spacing_(spacing) {
+  Require(!poses.empty(), "the simulator needs at least one pose");
+  Require(spacing > 0.1, "path sample spacing must be > 0.1 m");
+  Eigen::Vector3d down = Eigen::Vector3d::Zero();
+  for (const auto& T : poses) down += T.linear().col(1);
+  Require(down.norm() > 1e-6, "cannot determine the down direction of the trajectory");
+  down_ = down.normalized();
+  axis_a_ = down_.unitOrthogonal();
+  axis_b_ = down_.cross(axis_a_);
+
+  // Horizontal positions, heights and arc lengths of the camera centres.
+  const int n = static_cast<int>(poses.size());
+  std::vector<Eigen::Vector3d> flat(n);
+  std::vector<double> height(n);
+  pose_s_.assign(n, 0.0);
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector3d p = poses[i].translation();
+    height[i] = p.dot(down_);
+    flat[i] = p - height[i] * down_;
+    if (i > 0) pose_s_[i] = pose_s_[i - 1] + (flat[i] - flat[i - 1]).norm();
+  }
+  const double total = pose_s_.back();
+  // Driving direction at the ends: from positions 5 m apart, or the camera's
+  // optical axis when the camera hardly moves.
+  auto end_direction = [&](bool at_end) {
+    const int i = at_end ? n - 1 : 0;
+    const double target = at_end ? total - 5.0 : 5.0;
+    int j = i;
+    if (total > 1.0) {
+      j = static_cast<int>(std::lower_bound(pose_s_.begin(), pose_s_.end(), target) - pose_s_.begin());
+      j = std::clamp(j, 0, n - 1);
+    }
+    Eigen::Vector3d d = at_end ? flat[i] - flat[j] : flat[j] - flat[i];
+    if (d.norm() < 0.5) d = poses[i].linear().col(2) - poses[i].linear().col(2).dot(down_) * down_;
+    return Eigen::Vector3d(d.normalized());
+  };
+  const Eigen::Vector3d dir_begin = end_direction(false), dir_end = end_direction(true);
+
+  auto position_at = [&](double s, double* h) -> Eigen::Vector3d {
+    if (s <= 0) {
+      *h = height[0];
+      return flat[0] + s * dir_begin;
+    }
+    if (s >= total) {
+      *h = height[n - 1];
+      return flat[n - 1] + (s - total) * dir_end;
+    }
+    const int k = static_cast<int>(std::upper_bound(pose_s_.begin(), pose_s_.end(), s) - pose_s_.begin());
+    const int a = std::max(k - 1, 0), b = std::min(k, n - 1);
+    const double len = pose_s_[b] - pose_s_[a];
+    const double t = len > 1e-9 ? (s - pose_s_[a]) / len : 0.0;
+    *h = height[a] + t * (height[b] - height[a]);
+    return flat[a] + t * (flat[b] - flat[a]);
+  };
+
+  const int before = static_cast<int>(std::ceil(extension / spacing));
+  const int count = before + static_cast<int>(std::ceil((total + extension) / spacing)) + 1;
+  std::vector<Eigen::Vector3d> centre(count);
+  std::vector<double> h(count);
+  samples_.resize(count);
+  for (int j = 0; j < count; ++j) {
+    samples_[j].s = (j - before) * spacing;
+    centre[j] = position_at(samples_[j].s, &h[j]);
+  }
+  // The road follows the path's height, smoothed over ~+-8 m so that the
+  // vehicle's pitching does not turn into bumps.
+  const int half = std::max(1, static_cast<int>(std::round(8.0 / spacing)));
+  for (int j = 0; j < count; ++j) {
+    double sum = 0, weight = 0;
+    for (int k = std::max(0, j - half); k <= std::min(count - 1, j + half); ++k) {
+      const double w = 1.0 + half - std::abs(k - j);
+      sum += w * h[k];
+      weight += w;
+    }
+    PathSample& sample = samples_[j];
+    sample.road = centre[j] + (sum / weight + camera_height) * down_;
+    const Eigen::Vector3d d = centre[std::min(j + 1, count - 1)] - centre[std::max(j - 1, 0)];
+    sample.tangent = d.norm() > 1e-9 ? d.normalized() : dir_begin;
+    sample.right = down_.cross(sample.tangent).normalized();
+  }
+  for (int j = 0; j < count; ++j) {
+    const auto cell = Cell(samples_[j].road);
+    grid_[(static_cast<int64_t>(cell.first) << 32) ^ static_cast<uint32_t>(cell.second)].push_back(j);
+  }
+}
+
+int StreetPath::SampleAt(double s) const {
+  const double first = samples_.front().s;
+  const int j = static_cast<int>(std::lround((s - first) / spacing_));
+  return std::clamp(j, 0, static_cast<int>(samples_.size()) - 1);
+}
+
+std::pair<int, int> StreetPath::Cell(const Eigen::Vector3d& q) const {
+  return {static_cast<int>(std::floor(q.dot(axis_a_) / cell_size_)),
+          static_cast<int>(std::floor(q.dot(axis_b_) / cell_size_))};
+}
+
+bool StreetPath::InZone(const Eigen::Vector3d& q, Zone zone, double margin, int ignore_begin,
+                        int ignore_end) const {
+  const auto cell = Cell(q);
+  for (int da = -1; da <= 1; ++da)
+    for (int db = -1; db <= 1; ++db) {
+      const int64_t key = (static_cast<int64_t>(cell.first + da) << 32) ^ static_cast<uint32_t>(cell.second + db);
+      const auto it = grid_.find(key);
+      if (it == grid_.end()) continue;
+      for (int j : it->second) {
+        if (j >= ignore_begin && j < ignore_end) continue;
+        const PathSample& sample = samples_[j];
+        const Eigen::Vector3d d = q - sample.road;
+        if (std::abs(d.dot(down_)) > 4.0) continue;  // over- or underpass
+        if (std::abs(d.dot(sample.tangent)) > 0.75 * spacing_ + 0.1) continue;
+        const double lateral = d.dot(sample.right);
+        const StreetProfile& p = sample.profile;
+        double lo = -1.6, hi = 1.6;
+        if (zone == Zone::kRoad) {
+          lo = p.left_edge;
+          hi = p.right_edge;
+        } else if (zone == Zone::kStreet) {
+          lo = p.left_edge - p.sidewalk_left;
+          hi = p.right_edge + p.sidewalk_right;
+        }
+        if (lateral > lo - margin && lateral < hi + margin) return true;
+      }
+    }
+  return false;
+}
+
+std::vector<Eigen::Isometry3d> GenerateDrivingPath(int num_poses, double speed, double frame_interval,
+                                                   uint64_t seed) {
+  Require(num_poses > 0, "the generated path needs at least one pose");
+  Require(speed > 0 && speed < 60, "generated path speed must be in (0, 60) m/s");
+  std::mt19937_64 rng(seed * 7919u + 17u);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  const double kPi = 3.14159265358979323846;
+  // Curvature program: straights and turns, curvature ramped over 6 m.
+  double heading = 0, curvature = 0, target = 0, segment_left = 30 + 60 * u(rng);
+  bool turning = false;
+  Eigen::Vector3d pos = Eigen::Vector3d::Zero();  // x right, y down, z forward
+  const double hill_a1 = 1.0 + 1.5 * u(rng), hill_l1 = 180 + 200 * u(rng), hill_p1 = 2 * kPi * u(rng);
+  const double hill_a2 = 0.3 + 0.6 * u(rng), hill_l2 = 60 + 80 * u(rng), hill_p2 = 2 * kPi * u(rng);
+  auto hill = [&](double s) {
+    return hill_a1 * std::sin(2 * kPi * s / hill_l1 + hill_p1) + hill_a2 * std::sin(2 * kPi * s / hill_l2 + hill_p2);
+  };
+  const double h0 = hill(0);
+  Eigen::Vector3d shake = Eigen::Vector3d::Zero();  // slow roll/pitch vibration (rad)
+  std::vector<Eigen::Isometry3d> poses;
+  poses.reserve(num_poses);
+  double s = 0, v = speed;
+  for (int i = 0; i < num_poses; ++i) {
+    const double ds = 0.05;  // integrate in small steps for a smooth path
+    const double slope = (hill(s + 0.5) - hill(s - 0.5));
+    Eigen::Vector3d forward(std::sin(heading), -slope, std::cos(heading));  // uphill = -y
+    forward.normalize();
+    const Eigen::Vector3d down_world(0, 1, 0);
+    const Eigen::Vector3d x_axis = down_world.cross(forward).normalized();
+    const Eigen::Vector3d y_axis = forward.cross(x_axis);
+    Eigen::Matrix3d R;
+    R.col(0) = x_axis;
+    R.col(1) = y_axis;
+    R.col(2) = forward;
+    shake = 0.9 * shake + 0.0015 * Eigen::Vector3d(gauss(rng), 0.3 * gauss(rng), gauss(rng));
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.linear() = R * ExpSO3(shake);
+    T.translation() = Eigen::Vector3d(pos.x(), -(hill(s) - h0), pos.z());
+    poses.push_back(T);
+    // Advance one frame.
+    v = std::clamp(v + 0.05 * gauss(rng) - 0.02 * (v - speed), 0.5 * speed, 1.3 * speed);
+    const double step = v * frame_interval * (turning ? 0.8 : 1.0);
+    for (double done = 0; done < step; done += ds) {
+      const double d = std::min(ds, step - done);
+      curvature += (target - curvature) * std::min(1.0, d / 3.0);  // ~3 m transition
+      heading += curvature * d;
+      pos.x() += std::sin(heading) * d;
+      pos.z() += std::cos(heading) * d;
+      s += d;
+      segment_left -= d;
+      if (segment_left <= 0) {
+        turning = !turning;
+        if (turning) {
+          const double radius = 15 + 45 * u(rng);
+          const double angle = (15 + 75 * u(rng)) * kPi / 180;
+          target = (u(rng) < 0.5 ? -1 : 1) / radius;
+          segment_left = angle * radius;
+        } else {
+          target = 0;
+          segment_left = 40 + 120 * u(rng);
+        }
+      }
+    }
+  }
+  const Eigen::Isometry3d first_inv = poses.front().inverse();
+  for (auto& T : poses) T = first_inv * T;
+  return poses;
+}
+
+}  // namespace dvso::sim

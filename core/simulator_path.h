@@ -1,0 +1,84 @@
+// The driving path of the synthetic world: camera poses (from a KITTI pose
+// file or generated), resampled by arc length into a street centre line with a
+// local frame and road height per sample, plus the street's cross-section
+// profile (lane, road edges, sidewalks) along it. Objects are placed relative
+// to this line, and a spatial hash answers "is this point on some street?" so
+// that loops and crossings of the path never get a building in the road.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <unordered_map>
+#include <vector>
+
+namespace dvso::sim {
+
+// Cross-section of the street at one sample; lateral offsets are metres to the
+// right of the camera path (negative = left).
+struct StreetProfile {
+  double left_edge = -5.5;     // left road edge (curb)
+  double right_edge = 2.0;     // right road edge (curb)
+  double sidewalk_left = 2.5;  // sidewalk width beyond the left curb
+  double sidewalk_right = 2.5; // sidewalk width beyond the right curb
+  bool parking_left = false;   // parking lane along the left curb
+  bool parking_right = false;  // parking lane along the right curb
+  bool green = false;          // verge of grass (else paved / dirt) and more trees
+  int section = 0;             // index of the street section (seeds its objects)
+};
+
+struct PathSample {
+  Eigen::Vector3d road;     // road surface point below the camera path (world)
+  Eigen::Vector3d tangent;  // horizontal unit driving direction
+  Eigen::Vector3d right;    // horizontal unit vector to the right (down x tangent)
+  double s = 0;             // arc length (m, horizontal), 0 at the first pose
+  StreetProfile profile;
+};
+
+// Where a point may lie relative to the streets (for object placement).
+enum class Zone {
+  kLane,    // within +-1.6 m of a camera path (would be driven through)
+  kRoad,    // between the curbs of some street
+  kStreet,  // road or sidewalk of some street
+};
+
+class StreetPath {
+ public:
+  // poses: camera-to-world of every frame of the trajectory (KITTI convention:
+  // camera y points down). spacing: metres between samples. extension: metres
+  // of straight street added before the first and after the last pose.
+  StreetPath(const std::vector<Eigen::Isometry3d>& poses, double camera_height, double spacing,
+             double extension);
+
+  // World "down" direction (mean camera y axis of the trajectory).
+  const Eigen::Vector3d& down() const { return down_; }
+  const std::vector<PathSample>& samples() const { return samples_; }
+  std::vector<PathSample>& mutable_samples() { return samples_; }
+  double spacing() const { return spacing_; }
+  // Arc length (m) of the camera centre of pose i.
+  double PoseArcLength(int i) const { return pose_s_[i]; }
+  // Index of the sample nearest to arc length s (clamped).
+  int SampleAt(double s) const;
+
+  // True when the horizontal position of q lies in `zone` of any sample
+  // (grown by margin metres), optionally ignoring samples with index in
+  // [ignore_begin, ignore_end).
+  bool InZone(const Eigen::Vector3d& q, Zone zone, double margin, int ignore_begin = 0,
+              int ignore_end = 0) const;
+
+ private:
+  std::pair<int, int> Cell(const Eigen::Vector3d& q) const;
+  Eigen::Vector3d down_, axis_a_, axis_b_;  // down + horizontal basis
+  double spacing_;
+  std::vector<PathSample> samples_;
+  std::vector<double> pose_s_;
+  double cell_size_ = 12.0;
+  std::unordered_map<int64_t, std::vector<int>> grid_;
+};
+
+// A smooth, KITTI-like driving path (straights, turns of 15-60 m radius, gentle
+// hills, ~10 m/s at 10 Hz, small pitch/roll vibrations), camera-to-world, first
+// pose = identity, camera y down.
+std::vector<Eigen::Isometry3d> GenerateDrivingPath(int num_poses, double speed, double frame_interval,
+                                                   uint64_t seed);
+
+}  // namespace dvso::sim

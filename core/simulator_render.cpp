@@ -1,0 +1,261 @@
+#include "core/simulator_render.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <thread>
+#include <vector>
+
+#include "core/error.h"
+
+namespace dvso::sim {
+namespace {
+
+constexpr int kTileRows = 8;
+constexpr double kNearPlane = 0.05;  // metres
+
+// A triangle after clipping and projection: three edge functions
+// E(x, y) = a x + b y + c (>= 0 inside), inverse depth 1/z = p x + q y + r.
+struct ScreenTriangle {
+  double ea[3], eb[3], ec[3];
+  bool include_zero[3];  // top-left rule: pixels exactly on a shared edge go to one triangle
+  double ip, iq, ir;
+  int x0, x1, y0, y1;  // inclusive pixel bounding box
+  int triangle;
+};
+
+// splitmix64: per-pixel noise that is independent of thread scheduling.
+inline uint64_t Mix(uint64_t x) {
+  x += 0x9e3779b97f4a7c15ull;
+  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
+  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
+  return x ^ (x >> 31);
+}
+// Approximately standard normal value from 64 random bits (sum of four
+// uniforms, Irwin-Hall; variance matched).
+inline float GaussFromBits(uint64_t bits) {
+  const float sum = static_cast<float>((bits & 0xffff) + ((bits >> 16) & 0xffff) + ((bits >> 32) & 0xffff) +
+                                       ((bits >> 48) & 0xffff)) *
+                    (1.0f / 65536.0f);
+  return (sum - 2.0f) * 1.7320508f;
+}
+
+inline uint8_t Quantise(float v) { return static_cast<uint8_t>(std::clamp(v + 0.5f, 0.f, 255.f)); }
+
+}  // namespace
+
+Renderer::Renderer(const Scene& scene, const TextureBank& textures, const PinholeCamera& camera, int num_threads,
+                   double max_distance)
+    : scene_(scene), shader_(scene, textures), camera_(camera), num_threads_(num_threads), max_distance_(max_distance) {
+  camera_.Check();
+  Require(num_threads >= 1, "number of render threads must be >= 1");
+  Require(max_distance > 1.0, "render distance must be > 1 m");
+}
+
+RenderedView Renderer::Render(const Eigen::Isometry3d& T_world_camera, const Photometric& photometric,
+                              bool with_color) const {
+  const int width = camera_.width, height = camera_.height;
+  const double fx = camera_.fx, fy = camera_.fy, cx = camera_.cx, cy = camera_.cy;
+  const Eigen::Matrix3d R = T_world_camera.linear();
+  const Eigen::Matrix3d Rt = R.transpose();
+  const Eigen::Vector3d C = T_world_camera.translation();
+
+  // ---- 1. Cull chunks against the view frustum, clip and project triangles.
+  Eigen::Vector3d side_planes[4] = {Eigen::Vector3d(1, 0, (cx + 0.5) / fx), Eigen::Vector3d(-1, 0, (width - 0.5 - cx) / fx),
+                                    Eigen::Vector3d(0, 1, (cy + 0.5) / fy), Eigen::Vector3d(0, -1, (height - 0.5 - cy) / fy)};
+  for (auto& p : side_planes) p.normalize();
+  std::vector<ScreenTriangle> screen;
+  screen.reserve(8192);
+  for (const Chunk& chunk : scene_.chunks) {
+    const Eigen::Vector3d c = Rt * (chunk.center - C);
+    if (c.z() + chunk.radius < kNearPlane || c.z() - chunk.radius > max_distance_) continue;
+    bool outside = false;
+    for (const auto& p : side_planes) outside |= p.dot(c) < -chunk.radius;
+    if (outside) continue;
+    for (int t = chunk.begin; t < chunk.end; ++t) {
+      const Triangle& tri = scene_.triangles[t];
+      Eigen::Vector3d v[3];
+      for (int k = 0; k < 3; ++k) v[k] = Rt * (tri.v[k] - C);
+      bool culled = false;
+      for (const auto& p : side_planes) culled |= p.dot(v[0]) < 0 && p.dot(v[1]) < 0 && p.dot(v[2]) < 0;
+      if (culled || (v[0].z() < kNearPlane && v[1].z() < kNearPlane && v[2].z() < kNearPlane)) continue;
+      // Plane in camera coordinates: n_c . X = w_c; 1/z along pixel rays is affine in (x, y).
+      const Eigen::Vector3d nc = Rt * tri.normal;
+      const double wc = tri.offset - tri.normal.dot(C);
+      if (std::abs(wc) < 1e-9) continue;  // seen exactly edge-on
+      // Clip against the near plane (polygon of up to 4 vertices). Intersections
+      // are computed from canonically ordered endpoints so that neighbouring
+      // triangles produce bit-identical vertices (no cracks).
+      Eigen::Vector3d poly[4];
+      int count = 0;
+      for (int k = 0; k < 3; ++k) {
+        const Eigen::Vector3d& a = v[k];
+        const Eigen::Vector3d& b = v[(k + 1) % 3];
+        const bool ina = a.z() >= kNearPlane, inb = b.z() >= kNearPlane;
+        if (ina) poly[count++] = a;
+        if (ina != inb) {
+          const bool a_first = std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3);
+          const Eigen::Vector3d& p = a_first ? a : b;
+          const Eigen::Vector3d& q = a_first ? b : a;
+          const double s = (kNearPlane - p.z()) / (q.z() - p.z());
+          poly[count++] = p + s * (q - p);
+        }
+      }
+      if (count < 3) continue;
+      double px[4], py[4];
+      for (int k = 0; k < count; ++k) {
+        px[k] = fx * poly[k].x() / poly[k].z() + cx;
+        py[k] = fy * poly[k].y() / poly[k].z() + cy;
+      }
+      for (int k = 1; k + 1 < count; ++k) {
+        const int idx[3] = {0, k, k + 1};
+        ScreenTriangle st;
+        double xmin = 1e300, xmax = -1e300, ymin = 1e300, ymax = -1e300;
+        for (int e = 0; e < 3; ++e) {
+          const double x0 = px[idx[e]], y0 = py[idx[e]], x1 = px[idx[(e + 1) % 3]], y1 = py[idx[(e + 1) % 3]];
+          st.ea[e] = y0 - y1;
+          st.eb[e] = x1 - x0;
+          st.ec[e] = x0 * y1 - x1 * y0;
+          xmin = std::min(xmin, x0);
+          xmax = std::max(xmax, x0);
+          ymin = std::min(ymin, y0);
+          ymax = std::max(ymax, y0);
+        }
+        const double area = st.ec[0] + st.ec[1] + st.ec[2];  // twice the signed area
+        if (area == 0) continue;
+        for (int e = 0; e < 3; ++e) {
+          if (area < 0) {
+            st.ea[e] = -st.ea[e];
+            st.eb[e] = -st.eb[e];
+            st.ec[e] = -st.ec[e];
+          }
+          st.include_zero[e] = st.ea[e] > 0 || (st.ea[e] == 0 && st.eb[e] > 0);
+        }
+        st.x0 = std::max(0, static_cast<int>(std::ceil(xmin)));
+        st.x1 = std::min(width - 1, static_cast<int>(std::floor(xmax)));
+        st.y0 = std::max(0, static_cast<int>(std::ceil(ymin)));
+        st.y1 = std::min(height - 1, static_cast<int>(std::floor(ymax)));
+        if (st.x0 > st.x1 || st.y0 > st.y1) continue;
+        st.ip = nc.x() / (fx * wc);
+        st.iq = nc.y() / (fy * wc);
+        st.ir = (nc.z() - nc.x() * cx / fx - nc.y() * cy / fy) / wc;
+        st.triangle = t;
+        screen.push_back(st);
+      }
+    }
+  }
+  // Bin by tile rows.
+  const int num_tiles = (height + kTileRows - 1) / kTileRows;
+  std::vector<std::vector<int>> bins(num_tiles);
+  for (int i = 0; i < static_cast<int>(screen.size()); ++i)
+    for (int tile = screen[i].y0 / kTileRows; tile <= screen[i].y1 / kTileRows; ++tile) bins[tile].push_back(i);
+
+  RenderedView out;
+  out.grey.create(height, width, CV_8UC1);
+  out.depth.create(height, width, CV_32FC1);
+  if (with_color) out.color.create(height, width, CV_8UC3);
+  const float min_inverse_depth = static_cast<float>(1.0 / max_distance_);
+  const double half_diagonal_sq = 0.25 * (static_cast<double>(width) * width + static_cast<double>(height) * height);
+  const double pixel_angle = 1.0 / std::max(fx, fy);
+  const float scale = static_cast<float>(255.0 * photometric.gain);
+
+  // ---- 2. Per tile: visibility buffer, then shade every pixel once.
+  std::atomic<int> next_tile{0};
+  auto worker = [&]() {
+    std::vector<float> zbuf(static_cast<size_t>(kTileRows) * width);
+    std::vector<int> ids(static_cast<size_t>(kTileRows) * width);
+    for (int tile = next_tile++; tile < num_tiles; tile = next_tile++) {
+      const int row0 = tile * kTileRows, row1 = std::min(height, row0 + kTileRows);
+      std::fill(zbuf.begin(), zbuf.end(), min_inverse_depth);
+      std::fill(ids.begin(), ids.end(), -1);
+      for (int i : bins[tile]) {
+        const ScreenTriangle& st = screen[i];
+        for (int y = std::max(row0, st.y0); y <= std::min(row1 - 1, st.y1); ++y) {
+          // Conservative span of the row from the three edges, exact test per pixel.
+          double lo = st.x0, hi = st.x1;
+          bool empty = false;
+          for (int e = 0; e < 3; ++e) {
+            const double k = st.eb[e] * y + st.ec[e];
+            if (st.ea[e] > 0) {
+              lo = std::max(lo, std::floor(-k / st.ea[e]) - 1);
+            } else if (st.ea[e] < 0) {
+              hi = std::min(hi, std::ceil(-k / st.ea[e]) + 1);
+            } else if (k < 0) {
+              empty = true;
+            }
+          }
+          if (empty || lo > hi) continue;
+          float* zrow = &zbuf[static_cast<size_t>(y - row0) * width];
+          int* idrow = &ids[static_cast<size_t>(y - row0) * width];
+          for (int x = static_cast<int>(lo); x <= static_cast<int>(hi); ++x) {
+            bool inside = true;
+            for (int e = 0; e < 3 && inside; ++e) {
+              const double val = st.ea[e] * x + st.eb[e] * y + st.ec[e];
+              inside = val > 0 || (val == 0 && st.include_zero[e]);
+            }
+            if (!inside) continue;
+            const float iz = static_cast<float>(st.ip * x + st.iq * y + st.ir);
+            if (iz > zrow[x]) {
+              zrow[x] = iz;
+              idrow[x] = i;
+            }
+          }
+        }
+      }
+      for (int y = row0; y < row1; ++y) {
+        const int* idrow = &ids[static_cast<size_t>(y - row0) * width];
+        uint8_t* grey = out.grey.ptr<uint8_t>(y);
+        float* depth = out.depth.ptr<float>(y);
+        uint8_t* color = with_color ? out.color.ptr<uint8_t>(y) : nullptr;
+        const double yn = (y - cy) / fy;
+        for (int x = 0; x < width; ++x) {
+          const double xn = (x - cx) / fx;
+          const Eigen::Vector3d ray = R.col(0) * xn + R.col(1) * yn + R.col(2);  // world, camera z = 1
+          Eigen::Vector3f radiance;
+          if (idrow[x] < 0) {
+            radiance = shader_.Sky(ray.normalized(), pixel_angle);
+            depth[x] = 0.f;
+          } else {
+            const ScreenTriangle& st = screen[idrow[x]];
+            const Triangle& tri = scene_.triangles[st.triangle];
+            const double n_ray = tri.normal.dot(ray);
+            const double z = (tri.offset - tri.normal.dot(C)) / n_ray;  // exact depth of the plane hit
+            const Eigen::Vector3d point = C + z * ray;
+            // Hit point displacement per pixel (ray differentials on the plane).
+            const Eigen::Vector3d rx = R.col(0) / fx, ry = R.col(1) / fy;
+            const Eigen::Vector3d dPdx = z * (rx - ray * (tri.normal.dot(rx) / n_ray));
+            const Eigen::Vector3d dPdy = z * (ry - ray * (tri.normal.dot(ry) / n_ray));
+            radiance = shader_.Surface(tri, point, dPdx, dPdy);
+            depth[x] = static_cast<float>(z);
+          }
+          // Camera: exposure gain/bias, vignetting, noise, 8-bit quantisation.
+          const double r2 = (x - cx) * (x - cx) + (y - cy) * (y - cy);
+          const float vignette = static_cast<float>(std::max(0.0, 1.0 - photometric.vignetting_strength * r2 / half_diagonal_sq));
+          const float k = scale * vignette;
+          const float bias = static_cast<float>(photometric.bias);
+          const float lum = 0.299f * radiance.x() + 0.587f * radiance.y() + 0.114f * radiance.z();
+          const uint64_t pixel_key = photometric.noise_seed ^ (static_cast<uint64_t>(y) << 32 | static_cast<uint32_t>(x));
+          float noise = 0.f;
+          if (photometric.noise_sigma > 0)
+            noise = static_cast<float>(photometric.noise_sigma) * GaussFromBits(Mix(pixel_key));
+          grey[x] = Quantise(k * lum + bias + noise);
+          if (color) {
+            for (int ch = 0; ch < 3; ++ch) {
+              float cn = 0.f;
+              if (photometric.noise_sigma > 0)
+                cn = static_cast<float>(photometric.noise_sigma) * GaussFromBits(Mix(pixel_key + 0x1234567ull * (ch + 1)));
+              color[3 * x + (2 - ch)] = Quantise(k * radiance[ch] + bias + cn);  // BGR
+            }
+          }
+        }
+      }
+    }
+  };
+  std::vector<std::thread> threads;
+  for (int t = 1; t < num_threads_; ++t) threads.emplace_back(worker);
+  worker();
+  for (auto& t : threads) t.join();
+  return out;
+}
+
+}  // namespace dvso::sim

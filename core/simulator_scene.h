@@ -1,0 +1,128 @@
+// Geometry and materials of the synthetic street: a list of planar triangles,
+// each pointing at a Surface (texture mapping, colour, shading normal and an
+// optional analytic overlay such as lane markings), grouped into chunks with a
+// bounding sphere for view-frustum culling. The builder lays out the street
+// (road, curbs, sidewalks, verges) and places buildings, parked cars, poles,
+// signs, trees and hedges along a StreetPath.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <vector>
+
+#include "core/simulator_path.h"
+#include "core/simulator_textures.h"
+
+namespace dvso::sim {
+
+enum class NormalMode : uint8_t {
+  kFlat,      // the triangle's own plane normal
+  kEllipsoid, // smooth normal of an ellipsoid (tree crowns, bushes)
+  kCylinder,  // smooth radial normal of a vertical cylinder (poles, trunks)
+};
+
+enum class Overlay : uint8_t {
+  kNone,
+  kRoadMarkings,  // dashed centre line and solid edge lines, in street coordinates
+  kPlinth,        // darker band at the bottom of a facade
+  kShadow,        // soft contact shadow under a parked car
+};
+
+struct Surface {
+  int texture = kTexAsphalt;            // detail texture (TextureId)
+  Eigen::Vector3f tint{1.f, 1.f, 1.f};  // RGB albedo multiplier
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();  // texture origin (world)
+  Eigen::Vector3d axis_u = Eigen::Vector3d::UnitX(); // world -> u, in tiles per metre
+  Eigen::Vector3d axis_v = Eigen::Vector3d::UnitZ(); // world -> v, in tiles per metre
+  float macro_scale = 0.f;     // frequency of the macro stain texture relative to (u, v); 0 = off
+  float macro_strength = 0.f;  // contrast of the macro stains (0..1)
+  int max_taps = 1;            // anisotropic filter taps (ground surfaces seen at grazing angles)
+  NormalMode normal_mode = NormalMode::kFlat;
+  Eigen::Vector3d shape_center = Eigen::Vector3d::Zero();  // ellipsoid centre / cylinder axis point
+  Eigen::Vector2d shape_radii{1.0, 1.0};                   // ellipsoid horizontal, vertical radius
+  Overlay overlay = Overlay::kNone;
+  // Overlay frame: street sample point, its tangent and right vectors, arc length.
+  Eigen::Vector3d frame_origin = Eigen::Vector3d::Zero();
+  Eigen::Vector3d frame_tangent = Eigen::Vector3d::UnitZ();
+  Eigen::Vector3d frame_right = Eigen::Vector3d::UnitX();
+  double frame_s0 = 0;
+  float overlay_a = 0, overlay_b = 0, overlay_c = 0;  // overlay parameters (see Overlay)
+  uint8_t overlay_flags = 0;
+};
+
+struct Triangle {
+  Eigen::Vector3d v[3];
+  Eigen::Vector3d normal;  // unit plane normal, oriented outwards (lighting)
+  double offset = 0;       // plane: normal . x = offset
+  int surface = 0;
+};
+
+struct Chunk {
+  Eigen::Vector3d center = Eigen::Vector3d::Zero();
+  double radius = 0;
+  int begin = 0, end = 0;  // triangle range
+};
+
+struct Scene {
+  std::vector<Surface> surfaces;
+  std::vector<Triangle> triangles;
+  std::vector<Chunk> chunks;
+  Eigen::Vector3d down = Eigen::Vector3d::UnitY();     // world down
+  Eigen::Vector3d horizontal_a = Eigen::Vector3d::UnitX();  // horizontal basis (ground textures)
+  Eigen::Vector3d horizontal_b = Eigen::Vector3d::UnitZ();
+  Eigen::Vector3d to_sun = Eigen::Vector3d(0.3, -0.8, 0.5).normalized();  // unit, towards the sun
+  int num_buildings = 0, num_cars = 0, num_poles = 0, num_trees = 0;
+};
+
+struct SceneOptions {
+  double building_density = 0.8;  // fraction of street length lined by near buildings (0..1)
+  double car_density = 0.6;       // fraction of parking lanes occupied by cars (0..1)
+  double tree_density = 0.5;      // relative number of trees, hedges and bushes (0..)
+  double curb_height = 0.12;      // sidewalk height above the road (m)
+};
+
+// Builds the whole street along the path. Assigns each sample's StreetProfile
+// (hence the non-const path). Deterministic for a given path and seed.
+Scene BuildStreetScene(StreetPath& path, const SceneOptions& options, uint64_t seed);
+
+// --- primitive helpers shared by the scene files (simulator_scene.cpp,
+// simulator_objects.cpp) ---
+class SceneBuilder {
+ public:
+  SceneBuilder(Scene* scene, const Eigen::Vector3d& down) : scene_(scene), down_(down) {}
+  const Eigen::Vector3d& down() const { return down_; }
+  Eigen::Vector3d up() const { return -down_; }
+  int AddSurface(const Surface& surface);
+  void BeginChunk();
+  void EndChunk();
+  // Planar-ish quad a-b-c-d (two triangles a-b-c, a-c-d); normals oriented
+  // towards `outward`.
+  void AddQuad(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
+               const Eigen::Vector3d& d, const Eigen::Vector3d& outward, int surface);
+  void AddTriangle(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
+                   const Eigen::Vector3d& outward, int surface);
+  // Oriented box standing on `base` (centre of its bottom face), with
+  // horizontal unit `forward`, length along forward, width, height. Every
+  // face gets a copy of `surface` with u along the face's horizontal edge and
+  // v upwards (scaled by 1 / tile_metres); `top` replaces the top face's
+  // surface when >= 0.
+  void AddBox(const Eigen::Vector3d& base, const Eigen::Vector3d& forward, double length, double width,
+              double height, Surface surface, double tile_metres, int top = -1);
+  // Vertical prism approximating a cylinder, smooth-shaded.
+  void AddCylinder(const Eigen::Vector3d& base, double radius, double height, int sides, Surface surface,
+                   double tile_metres);
+  // Lumpy ellipsoid (subdivided icosahedron with radial noise), smooth-shaded.
+  void AddBlob(const Eigen::Vector3d& center, double radius_h, double radius_v, Surface surface,
+               double tile_metres, uint64_t seed);
+
+ private:
+  Scene* scene_;
+  Eigen::Vector3d down_;
+  int chunk_begin_ = 0;
+};
+
+// Places buildings, cars, poles, signs and vegetation (simulator_objects.cpp).
+void PlaceStreetObjects(const StreetPath& path, const SceneOptions& options, uint64_t seed,
+                        SceneBuilder* builder, Scene* scene);
+
+}  // namespace dvso::sim

@@ -1,0 +1,77 @@
+// Procedural, tileable, mip-mapped textures of the synthetic street world
+// (asphalt, paving, facades, leaves, ...). They are generated once per seed
+// and then only looked up: evaluating noise per pixel would be far too slow
+// for the 5 frames/s target, and the mip chain gives anti-aliased (filtered)
+// lookups so that distant surfaces do not shimmer between views, which would
+// break the photo-consistency that direct odometry (DSO) relies on.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+namespace dvso::sim {
+
+enum TextureId : int {
+  kTexAsphalt = 0,
+  kTexPaving,
+  kTexCurb,
+  kTexGrass,
+  kTexDirt,
+  kTexFacadePlaster,
+  kTexFacadeBrick,
+  kTexFacadePanels,
+  kTexFacadeStone,
+  kTexCarPaint,
+  kTexCarGlass,
+  kTexRubber,
+  kTexMetal,
+  kTexBark,
+  kTexLeaves,
+  kTexSign,
+  kTexMacro,   // low-frequency stains, multiplied on top of detail textures
+  kTexClouds,  // sky
+  kNumTextures
+};
+constexpr int kNumFacadeStyles = 4;  // kTexFacadePlaster .. kTexFacadeStone
+
+// A square, power-of-two, tileable single-channel texture (albedo in [0, 1])
+// with its full mip chain (2x2 box filter per level).
+class MipTexture {
+ public:
+  MipTexture() = default;
+  // level0 holds size*size values, row-major; size must be a power of two.
+  MipTexture(std::vector<float> level0, int size);
+
+  int size() const { return sizes_.empty() ? 0 : sizes_[0]; }
+  int num_levels() const { return static_cast<int>(levels_.size()); }
+  // Mean value of the texture (the 1x1 mip level).
+  float mean() const { return levels_.back()[0]; }
+
+  // Trilinear lookup at (u, v) in tiles (the texture repeats with period 1),
+  // filtered over a footprint of `footprint` level-0 texels.
+  float Sample(double u, double v, float footprint) const;
+  // Anisotropic lookup: the pixel footprint is given by the derivatives of
+  // (u, v) in tiles per pixel along image x and y; up to max_taps trilinear
+  // taps along the major axis (needed for the road seen at grazing angles).
+  float SampleAniso(double u, double v, float dudx, float dvdx, float dudy, float dvdy,
+                    int max_taps) const;
+  // Bilinear lookup in mip level `level` at texel coordinates of that level.
+  float Bilinear(int level, float x, float y) const;
+
+ private:
+  float Trilinear(float fu, float fv, float lod) const;
+  std::vector<std::vector<float>> levels_;
+  std::vector<int> sizes_;
+};
+
+// All textures of the world, generated deterministically from a seed.
+class TextureBank {
+ public:
+  explicit TextureBank(uint64_t seed, int size = 512);
+  const MipTexture& operator[](int id) const { return textures_[id]; }
+
+ private:
+  std::vector<MipTexture> textures_;
+};
+
+}  // namespace dvso::sim

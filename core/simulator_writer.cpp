@@ -1,0 +1,158 @@
+// Writes a simulated sequence in the KITTI odometry layout, frame by frame:
+//   image_0/ image_1/   grey left/right, uint8 PNG %06d.png
+//   image_2/ image_3/   colour left/right (only with options.color)
+//   depth_0/            left depth, uint16 PNG metres*256 (0 = sky or >= 256 m)
+//   disp_0/ disp_1/     left / right GT disparity, uint16 PNG pixels*256 (0 = sky)
+//   calib.txt times.txt poses.txt (GT, first frame = identity)
+//   exposures.txt       per frame: index, gain, bias (DSO affine brightness)
+//   vignette.png        V(x) as uint16 (65535 = 1), when vignetting is on
+//   simulation.yaml     the options and world statistics of the run
+// The metadata files are written last, so an interrupted run is recognisably
+// incomplete; every file is written atomically.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <future>
+#include <iomanip>
+#include <opencv2/imgcodecs.hpp>
+
+#include "core/disparity_io.h"
+#include "core/error.h"
+#include "core/fs_util.h"
+#include "core/progress.h"
+#include "core/sequence.h"
+#include "core/simulator.h"
+#include "core/trajectory.h"
+
+namespace dvso {
+namespace {
+
+void WritePng(const std::string& path, const cv::Mat& image) {
+  WriteAtomically(path, [&](const std::string& temp) {
+    RequireFile(cv::imwrite(temp, image, {cv::IMWRITE_PNG_COMPRESSION, 1}), path, "cannot write PNG");
+  });
+}
+
+void WriteText(const std::string& path, const std::function<void(std::ostream&)>& body) {
+  WriteAtomically(path, [&](const std::string& temp) {
+    std::ofstream out(temp);
+    RequireFile(out.good(), path, "cannot write file");
+    body(out);
+    RequireFile(out.good(), path, "write failed");
+  });
+}
+
+void WriteSimulationYaml(const std::string& path, const StreetSimulator& simulator, const SimulationSummary& summary) {
+  const SimulatorOptions& o = simulator.options();
+  const sim::Scene& scene = simulator.scene();
+  WriteText(path, [&](std::ostream& out) {
+    out << std::setprecision(10);
+    out << "# dvso simulate: options and world statistics of this run\n";
+    out << "trajectory: \"" << (o.trajectory_path.empty() ? "generated" : o.trajectory_path) << "\"\n";
+    out << "first_frame: " << o.first_frame << "\nnum_frames: " << summary.frames << "\nstride: " << o.stride << "\n";
+    out << "seed: " << o.seed << "\n";
+    out << "camera: {width: " << o.camera.left.width << ", height: " << o.camera.left.height
+        << ", fx: " << o.camera.left.fx << ", fy: " << o.camera.left.fy << ", cx: " << o.camera.left.cx
+        << ", cy: " << o.camera.left.cy << ", baseline: " << o.camera.baseline << "}\n";
+    out << "camera_height: " << o.camera_height << "\nframe_interval: " << o.frame_interval
+        << "\nmax_distance: " << o.max_distance << "\n";
+    out << "exposure_drift: " << (o.exposure_drift ? "true" : "false") << "\nexposure_sigma: " << o.exposure_sigma
+        << "\nexposure_max: " << o.exposure_max << "\nbias_sigma: " << o.bias_sigma << "\n";
+    out << "vignetting: " << (o.vignetting ? "true" : "false") << "\nvignetting_strength: " << o.vignetting_strength
+        << "\n";
+    out << "noise: " << (o.noise ? "true" : "false") << "\nnoise_sigma: " << o.noise_sigma << "\n";
+    out << "color: " << (o.color ? "true" : "false") << "\n";
+    out << "building_density: " << o.scene.building_density << "\ncar_density: " << o.scene.car_density
+        << "\ntree_density: " << o.scene.tree_density << "\n";
+    out << "world: {triangles: " << scene.triangles.size() << ", buildings: " << scene.num_buildings
+        << ", cars: " << scene.num_cars << ", poles: " << scene.num_poles << ", trees: " << scene.num_trees << "}\n";
+    out << "path_length_m: " << summary.path_length << "\nrender_seconds: " << summary.seconds << "\n";
+  });
+}
+
+}  // namespace
+
+SimulationSummary WriteSimulatedSequence(const SimulatorOptions& options, const std::string& output_dir,
+                                         bool show_progress) {
+  const auto start = std::chrono::steady_clock::now();
+  StreetSimulator simulator(options);
+  const int n = simulator.num_frames();
+  std::vector<std::string> dirs = {"image_0", "image_1", "depth_0", "disp_0", "disp_1"};
+  if (options.color) {
+    dirs.push_back("image_2");
+    dirs.push_back("image_3");
+  }
+  for (const auto& d : dirs) EnsureDirectory(JoinPath(output_dir, d));
+
+  SimulationSummary summary;
+  Trajectory poses;
+  std::unique_ptr<ProgressBar> bar;
+  if (show_progress) bar = std::make_unique<ProgressBar>("simulate", n);
+  Eigen::Vector3d previous = Eigen::Vector3d::Zero();
+  for (int i = 0; i < n; ++i) {
+    const SimulatedFrame frame = simulator.Render(i);
+    const std::string name = FrameFileName(i, ".png");
+    // Depth beyond the uint16 range (256 m) is marked invalid, not clamped.
+    cv::Mat depth = frame.left.depth.clone();
+    depth.setTo(0.f, depth >= 255.99f);
+    // Two writers in parallel: PNG compression is a good part of the time per frame.
+    auto second = std::async(std::launch::async, [&]() {
+      WritePng(JoinPath(JoinPath(output_dir, "image_1"), name), frame.right.grey);
+      WriteKittiMapPng(JoinPath(JoinPath(output_dir, "disp_0"), name), frame.disparity_left);
+      if (options.color) WritePng(JoinPath(JoinPath(output_dir, "image_3"), name), frame.right.color);
+    });
+    WritePng(JoinPath(JoinPath(output_dir, "image_0"), name), frame.left.grey);
+    WriteKittiMapPng(JoinPath(JoinPath(output_dir, "depth_0"), name), depth);
+    WriteKittiMapPng(JoinPath(JoinPath(output_dir, "disp_1"), name), frame.disparity_right);
+    if (options.color) WritePng(JoinPath(JoinPath(output_dir, "image_2"), name), frame.left.color);
+    second.get();
+
+    StampedPose pose;
+    pose.timestamp = frame.timestamp;
+    pose.T_world_camera = frame.T_first_camera;
+    poses.poses.push_back(pose);
+    if (i > 0) summary.path_length += (frame.T_first_camera.translation() - previous).norm();
+    previous = frame.T_first_camera.translation();
+    if (bar) {
+      char status[64];
+      std::snprintf(status, sizeof(status), "%.1f m driven", summary.path_length);
+      bar->Update(i + 1, status);
+    }
+  }
+  if (bar) bar->Finish();
+
+  // Metadata last.
+  WriteKittiCalibration(JoinPath(output_dir, "calib.txt"), simulator.camera());
+  WriteText(JoinPath(output_dir, "times.txt"), [&](std::ostream& out) {
+    out << std::scientific << std::setprecision(6);
+    for (const auto& p : poses.poses) out << p.timestamp << "\n";
+  });
+  WriteKittiTrajectory(JoinPath(output_dir, "poses.txt"), poses);
+  WriteText(JoinPath(output_dir, "exposures.txt"), [&](std::ostream& out) {
+    out << "# frame gain bias  (I = gain * 255 * V(x) * radiance + bias + noise)\n" << std::setprecision(9);
+    for (int i = 0; i < n; ++i) {
+      const sim::Photometric p = simulator.Exposure(i, 0);
+      out << i << " " << p.gain << " " << p.bias << "\n";
+    }
+  });
+  if (options.vignetting) {
+    const PinholeCamera& c = options.camera.left;
+    cv::Mat vignette(c.height, c.width, CV_16UC1);
+    const double half_diagonal_sq = 0.25 * (static_cast<double>(c.width) * c.width + static_cast<double>(c.height) * c.height);
+    for (int y = 0; y < c.height; ++y)
+      for (int x = 0; x < c.width; ++x) {
+        const double r2 = (x - c.cx) * (x - c.cx) + (y - c.cy) * (y - c.cy);
+        vignette.at<uint16_t>(y, x) =
+            static_cast<uint16_t>(std::lround(65535.0 * std::max(0.0, 1.0 - options.vignetting_strength * r2 / half_diagonal_sq)));
+      }
+    WritePng(JoinPath(output_dir, "vignette.png"), vignette);
+  }
+  summary.frames = n;
+  summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  WriteSimulationYaml(JoinPath(output_dir, "simulation.yaml"), simulator, summary);
+  return summary;
+}
+
+}  // namespace dvso

@@ -1,0 +1,337 @@
+// Ground-truth consistency of the synthetic street (core/simulator.h): stereo
+// and temporal photo-consistency through the GT disparity / depth / poses,
+// depth * disparity = fx * b, determinism, and the written KITTI layout.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <opencv2/imgcodecs.hpp>
+#include <vector>
+
+#include "core/disparity_io.h"
+#include "core/error.h"
+#include "core/fs_util.h"
+#include "core/sequence.h"
+#include "core/simulator.h"
+#include "core/trajectory.h"
+
+namespace dvso {
+namespace {
+
+namespace fs = std::filesystem;
+
+SimulatorOptions SmallOptions(int width = 310, int height = 94) {
+  SimulatorOptions o;
+  o.trajectory_path = std::string(DVSO_TEST_DATA_DIR) + "/kitti_poses/00.txt";
+  o.first_frame = 120;
+  o.num_frames = 3;
+  o.camera = StereoCamera{}.Resized(width, height);
+  o.texture_size = 256;
+  o.vignetting = false;
+  o.exposure_drift = false;
+  o.noise = true;
+  o.noise_sigma = 1.0;
+  return o;
+}
+
+float Bilinear(const cv::Mat& image, double x, double y) {
+  const int x0 = static_cast<int>(std::floor(x)), y0 = static_cast<int>(std::floor(y));
+  const double tx = x - x0, ty = y - y0;
+  auto at = [&](int xx, int yy) { return static_cast<double>(image.at<uint8_t>(yy, xx)); };
+  return static_cast<float>((1 - ty) * ((1 - tx) * at(x0, y0) + tx * at(x0 + 1, y0)) +
+                            ty * ((1 - tx) * at(x0, y0 + 1) + tx * at(x0 + 1, y0 + 1)));
+}
+float BilinearF(const cv::Mat& map, double x, double y) {
+  const int x0 = static_cast<int>(std::floor(x)), y0 = static_cast<int>(std::floor(y));
+  const double tx = x - x0, ty = y - y0;
+  auto at = [&](int xx, int yy) { return static_cast<double>(map.at<float>(yy, xx)); };
+  return static_cast<float>((1 - ty) * ((1 - tx) * at(x0, y0) + tx * at(x0 + 1, y0)) +
+                            ty * ((1 - tx) * at(x0, y0 + 1) + tx * at(x0 + 1, y0 + 1)));
+}
+
+struct ErrorStats {
+  int count = 0;
+  double mean = 0, median = 0, p90 = 0;
+};
+ErrorStats Summarise(std::vector<float> errors) {
+  ErrorStats s;
+  s.count = static_cast<int>(errors.size());
+  if (errors.empty()) return s;
+  double sum = 0;
+  for (float e : errors) sum += e;
+  s.mean = sum / errors.size();
+  std::nth_element(errors.begin(), errors.begin() + errors.size() / 2, errors.end());
+  s.median = errors[errors.size() / 2];
+  std::nth_element(errors.begin(), errors.begin() + errors.size() * 9 / 10, errors.end());
+  s.p90 = errors[errors.size() * 9 / 10];
+  return s;
+}
+
+// |left(x) - right(x - d(x) - shift)| over non-occluded pixels (left-right
+// check between disp_0 and disp_1), 2-pixel border excluded.
+ErrorStats StereoWarpError(const SimulatedFrame& f, double shift) {
+  std::vector<float> errors;
+  const cv::Mat& dl = f.disparity_left;
+  const cv::Mat& dr = f.disparity_right;
+  for (int y = 2; y < dl.rows - 2; ++y)
+    for (int x = 2; x < dl.cols - 2; ++x) {
+      const float d = dl.at<float>(y, x);
+      if (d <= 0) continue;
+      const double xr = x - d;
+      if (xr < 2 || xr > dl.cols - 3) continue;
+      // Non-occluded: the right view sees the same surface at xr.
+      const float d_right = dr.at<float>(y, static_cast<int>(std::lround(xr)));
+      if (std::abs(d_right - d) > 0.05f * d + 0.1f) continue;
+      errors.push_back(std::abs(f.left.grey.at<uint8_t>(y, x) - Bilinear(f.right.grey, xr - shift, y)));
+    }
+  return Summarise(errors);
+}
+
+class SimulatorTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() { simulator_ = std::make_unique<StreetSimulator>(SmallOptions()); }
+  static void TearDownTestSuite() { simulator_.reset(); }
+  static std::unique_ptr<StreetSimulator> simulator_;
+};
+std::unique_ptr<StreetSimulator> SimulatorTest::simulator_;
+
+TEST_F(SimulatorTest, RightImageWarpedByLeftDisparityReproducesLeft) {
+  const SimulatedFrame f = simulator_->Render(0);
+  const ErrorStats good = StereoWarpError(f, 0.0);
+  const int pixels = f.left.grey.rows * f.left.grey.cols;
+  EXPECT_GT(good.count, pixels / 2) << "too few non-occluded pixels with GT";
+  // Noise sigma 1 in both images: |difference| has mean ~1.13; texture
+  // interpolation adds a little.
+  EXPECT_LT(good.median, 2.5);
+  EXPECT_LT(good.mean, 3.0);
+  // Sensitivity: a wrong disparity (2 px off) must be clearly worse.
+  const ErrorStats wrong = StereoWarpError(f, 2.0);
+  std::printf("stereo warp |error|: mean %.2f median %.2f p90 %.2f over %d px (2 px off: mean %.2f)\n", good.mean,
+              good.median, good.p90, good.count, wrong.mean);
+  EXPECT_GT(wrong.mean, 2.0 * good.mean);
+}
+
+TEST_F(SimulatorTest, DisparityIsFxBOverDepthAndRightDisparityIsConsistent) {
+  const SimulatedFrame f = simulator_->Render(1);
+  const double fxb = simulator_->camera().FxB();
+  int valid = 0, consistent = 0;
+  for (int y = 0; y < f.left.depth.rows; ++y)
+    for (int x = 0; x < f.left.depth.cols; ++x) {
+      const float z = f.left.depth.at<float>(y, x), d = f.disparity_left.at<float>(y, x);
+      ASSERT_EQ(z > 0, d > 0);
+      if (z <= 0) continue;
+      ++valid;
+      EXPECT_NEAR(z * d, fxb, 1e-4 * fxb);
+      // The right view's depth at the corresponding pixel is the same (same
+      // orientation, baseline along x) unless occluded.
+      const double xr = x - d;
+      if (xr >= 0 && xr <= f.left.depth.cols - 2) {
+        const float zr = BilinearF(f.right.depth, xr, y);
+        if (std::abs(zr - z) < 0.01f * z) ++consistent;
+      }
+    }
+  EXPECT_GT(valid, f.left.depth.total() / 2);
+  EXPECT_GT(consistent, valid * 8 / 10);
+}
+
+TEST_F(SimulatorTest, ReprojectionWithGtPoseIntoNextFrameIsPhotoConsistent) {
+  const SimulatedFrame a = simulator_->Render(0);
+  const SimulatedFrame b = simulator_->Render(1);
+  const PinholeCamera& cam = simulator_->camera().left;
+  const Eigen::Isometry3d T_b_a = b.T_first_camera.inverse() * a.T_first_camera;
+  ASSERT_GT(T_b_a.translation().norm(), 0.3) << "the camera should move between frames";
+  std::vector<float> errors, shuffled;
+  for (int y = 2; y < cam.height - 2; ++y)
+    for (int x = 2; x < cam.width - 2; ++x) {
+      const float z = a.left.depth.at<float>(y, x);
+      if (z <= 0) continue;
+      const Eigen::Vector3d p = T_b_a * (z * cam.Unproject(x, y));
+      if (p.z() < 0.5) continue;
+      const Eigen::Vector2d q = cam.Project(p);
+      if (!cam.InImage(q.x(), q.y(), 2)) continue;
+      const float zb = BilinearF(b.left.depth, q.x(), q.y());
+      if (std::abs(zb - p.z()) > 0.02 * p.z()) continue;  // occluded in frame b
+      errors.push_back(std::abs(a.left.grey.at<uint8_t>(y, x) - Bilinear(b.left.grey, q.x(), q.y())));
+      shuffled.push_back(std::abs(a.left.grey.at<uint8_t>(y, x) - Bilinear(b.left.grey, q.x() + 3, q.y())));
+    }
+  const ErrorStats good = Summarise(errors), bad = Summarise(shuffled);
+  std::printf("temporal warp |error|: mean %.2f median %.2f p90 %.2f over %d px (3 px off: mean %.2f)\n", good.mean,
+              good.median, good.p90, good.count, bad.mean);
+  EXPECT_GT(good.count, static_cast<int>(cam.width * cam.height / 3));
+  EXPECT_LT(good.median, 2.5);
+  EXPECT_LT(good.mean, 3.5);
+  EXPECT_GT(bad.mean, 2.0 * good.mean);
+}
+
+TEST_F(SimulatorTest, RoadIsCameraHeightBelowTheCamera) {
+  const SimulatedFrame f = simulator_->Render(2);
+  const PinholeCamera& cam = simulator_->camera().left;
+  std::vector<float> heights;
+  for (int y = cam.height - 6; y < cam.height; ++y)
+    for (int x = cam.width / 2 - 10; x <= cam.width / 2 + 10; ++x) {
+      const float z = f.left.depth.at<float>(y, x);
+      ASSERT_GT(z, 0);
+      heights.push_back(static_cast<float>(z * (y - cam.cy) / cam.fy));
+    }
+  std::nth_element(heights.begin(), heights.begin() + heights.size() / 2, heights.end());
+  // Not exactly 1.65: the KITTI car pitches and the road height is smoothed.
+  EXPECT_NEAR(heights[heights.size() / 2], 1.65, 0.15);
+}
+
+TEST_F(SimulatorTest, TextureEverywhereExceptSky) {
+  SimulatorOptions o = SmallOptions(620, 188);
+  o.noise = false;
+  o.num_frames = 1;
+  const StreetSimulator simulator(o);
+  const SimulatedFrame f = simulator.Render(0);
+  // Fraction of non-sky pixels with a visible intensity gradient nearby
+  // (direct odometry needs gradients everywhere on the road and walls).
+  int structure = 0, textured = 0, sky = 0;
+  for (int y = 2; y < f.left.grey.rows - 2; ++y)
+    for (int x = 2; x < f.left.grey.cols - 2; ++x) {
+      if (f.left.depth.at<float>(y, x) <= 0) {
+        ++sky;
+        continue;
+      }
+      ++structure;
+      int lo = 255, hi = 0;
+      for (int dy = -2; dy <= 2; ++dy)
+        for (int dx = -2; dx <= 2; ++dx) {
+          const int v = f.left.grey.at<uint8_t>(y + dy, x + dx);
+          lo = std::min(lo, v);
+          hi = std::max(hi, v);
+        }
+      if (hi - lo >= 3) ++textured;
+    }
+  EXPECT_GT(structure, 4 * sky) << "a street should be mostly structure, not sky";
+  std::printf("textured: %.3f of %d structure pixels, sky %d\n", static_cast<double>(textured) / structure, structure,
+              sky);
+  EXPECT_GT(textured, structure * 85 / 100);
+}
+
+TEST(Simulator, DeterministicPerSeed) {
+  SimulatorOptions o = SmallOptions(160, 48);
+  o.num_frames = 1;
+  o.exposure_drift = true;
+  const SimulatedFrame a = StreetSimulator(o).Render(0);
+  const SimulatedFrame b = StreetSimulator(o).Render(0);
+  EXPECT_EQ(cv::norm(a.left.grey, b.left.grey, cv::NORM_INF), 0);
+  EXPECT_EQ(cv::norm(a.right.grey, b.right.grey, cv::NORM_INF), 0);
+  EXPECT_EQ(cv::norm(a.left.depth, b.left.depth, cv::NORM_INF), 0);
+  o.seed = 2;
+  const SimulatedFrame c = StreetSimulator(o).Render(0);
+  EXPECT_GT(cv::norm(a.left.grey, c.left.grey, cv::NORM_L1), 0);
+  // Thread count must not change the result.
+  o.seed = 1;
+  o.num_threads = 1;
+  const SimulatedFrame d = StreetSimulator(o).Render(0);
+  EXPECT_EQ(cv::norm(a.left.grey, d.left.grey, cv::NORM_INF), 0);
+}
+
+TEST(Simulator, RejectsBadOptions) {
+  auto expect_error = [](const std::function<void(SimulatorOptions&)>& change) {
+    SimulatorOptions o = SmallOptions(160, 48);
+    change(o);
+    EXPECT_THROW(StreetSimulator{o}, Error);
+  };
+  expect_error([](SimulatorOptions& o) { o.stride = 0; });
+  expect_error([](SimulatorOptions& o) { o.num_frames = 0; });
+  expect_error([](SimulatorOptions& o) { o.first_frame = -1; });
+  expect_error([](SimulatorOptions& o) { o.first_frame = 100000; });
+  expect_error([](SimulatorOptions& o) { o.num_frames = 5000; });
+  expect_error([](SimulatorOptions& o) { o.trajectory_path = "/nonexistent/poses.txt"; });
+  expect_error([](SimulatorOptions& o) { o.texture_size = 300; });
+  expect_error([](SimulatorOptions& o) { o.noise_sigma = -1; });
+  expect_error([](SimulatorOptions& o) { o.camera.baseline = 0; });
+  expect_error([](SimulatorOptions& o) { o.camera.left.width = 8; });
+  expect_error([](SimulatorOptions& o) { o.scene.building_density = 1.5; });
+  expect_error([](SimulatorOptions& o) {
+    o.trajectory_path.clear();
+    o.num_frames = -1;
+  });
+}
+
+TEST(Simulator, GeneratedPathIsSmoothAndStartsAtIdentity) {
+  const auto poses = sim::GenerateDrivingPath(200, 10.0, 0.1, 3);
+  ASSERT_EQ(poses.size(), 200u);
+  EXPECT_TRUE(poses[0].isApprox(Eigen::Isometry3d::Identity(), 1e-12));
+  for (size_t i = 1; i < poses.size(); ++i) {
+    const double step = (poses[i].translation() - poses[i - 1].translation()).norm();
+    EXPECT_GT(step, 0.3);
+    EXPECT_LT(step, 1.5);
+    const Eigen::AngleAxisd turn(poses[i - 1].linear().transpose() * poses[i].linear());
+    EXPECT_LT(turn.angle(), 0.12) << "frame " << i;
+  }
+}
+
+TEST(Simulator, WritesKittiLayoutWithGroundTruth) {
+  const fs::path dir = fs::temp_directory_path() / ("dvso_sim_test_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  SimulatorOptions o = SmallOptions(160, 48);
+  o.num_frames = 3;
+  o.stride = 2;
+  o.exposure_drift = true;
+  o.vignetting = true;
+  const SimulationSummary summary = WriteSimulatedSequence(o, dir.string(), false);
+  EXPECT_EQ(summary.frames, 3);
+  for (const char* sub : {"image_0", "image_1", "depth_0", "disp_0", "disp_1"})
+    for (int i = 0; i < 3; ++i) EXPECT_TRUE(fs::exists(dir / sub / FrameFileName(i, ".png"))) << sub << " " << i;
+  EXPECT_FALSE(fs::exists(dir / "image_2"));
+  // calib.txt carries fx and the baseline.
+  const StereoCamera cam = ReadKittiCalibration((dir / "calib.txt").string(), 160, 48);
+  EXPECT_NEAR(cam.left.fx, o.camera.left.fx, 1e-6);
+  EXPECT_NEAR(cam.baseline, 0.537, 1e-9);
+  // poses.txt: GT relative to the first written frame; times in 0.1 s * stride.
+  const Trajectory poses = ReadTrajectory((dir / "poses.txt").string());
+  ASSERT_EQ(poses.size(), 3u);
+  EXPECT_TRUE(poses.poses[0].T_world_camera.isApprox(Eigen::Isometry3d::Identity(), 1e-9));
+  const Trajectory kitti = ReadTrajectory(o.trajectory_path);
+  const Eigen::Isometry3d expected = kitti.poses[120].T_world_camera.inverse() * kitti.poses[124].T_world_camera;
+  EXPECT_TRUE(poses.poses[2].T_world_camera.isApprox(expected, 1e-6));
+  const std::vector<double> times = ReadTimes((dir / "times.txt").string());
+  ASSERT_EQ(times.size(), 3u);
+  EXPECT_NEAR(times[2] - times[1], 0.2, 1e-9);
+  // Maps on disk: depth * disparity = fx * b up to the 1/256 quantisation.
+  const cv::Mat depth = ReadKittiMapPng((dir / "depth_0" / "000001.png").string());
+  const cv::Mat disparity = ReadKittiMapPng((dir / "disp_0" / "000001.png").string());
+  int valid = 0;
+  for (int y = 0; y < depth.rows; ++y)
+    for (int x = 0; x < depth.cols; ++x) {
+      const float z = depth.at<float>(y, x), d = disparity.at<float>(y, x);
+      if (z <= 0 || d <= 0) continue;
+      ++valid;
+      EXPECT_NEAR(z * d, cam.FxB(), (z + d) * 0.5 / 256 + 1e-3);
+    }
+  EXPECT_GT(valid, depth.rows * depth.cols / 2);
+  // The sequence reader opens what we wrote.
+  const auto reader = OpenSequence(dir.string());
+  EXPECT_EQ(reader->size(), 3);
+  EXPECT_EQ(reader->Read(2).left.cols, 160);
+  EXPECT_TRUE(fs::exists(dir / "exposures.txt"));
+  EXPECT_TRUE(fs::exists(dir / "vignette.png"));
+  fs::remove_all(dir);
+}
+
+TEST(Simulator, CommandLine) {
+  const fs::path dir = fs::temp_directory_path() / ("dvso_sim_cli_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  const std::string dvso = DVSO_BINARY;
+  const std::string ok = dvso + " simulate --width 128 --height 40 --count 2 --seed 4 --texture-size 128 --quiet --out " +
+                         dir.string() + " > /dev/null 2>&1";
+  EXPECT_EQ(std::system(ok.c_str()), 0);
+  EXPECT_TRUE(fs::exists(dir / "image_1" / "000001.png"));
+  EXPECT_TRUE(fs::exists(dir / "poses.txt"));
+  const std::string bad = dvso + " simulate --count 2 --stride 0 --out " + dir.string() + " > /dev/null 2>&1";
+  EXPECT_NE(std::system(bad.c_str()), 0);
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace dvso
