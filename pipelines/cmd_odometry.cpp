@@ -1,14 +1,72 @@
-// PLACEHOLDER until the owning issue lands: registers `dvso odometry` so the CLI
-// lists it, and fails loudly when run.
+// `dvso odometry`: direct sparse odometry (mono / stereo) over a sequence.
+// Thin: parses options, loads and prints the config, calls
+// vo::RunOdometryOnSequence (vo/system/sequence_runner.h).
+#include <iostream>
+#include <memory>
+
 #include "core/error.h"
+#include "core/sequence.h"
 #include "pipelines/commands.h"
+#include "vo/system/odometry_options.h"
+#include "vo/system/sequence_runner.h"
 
 namespace dvso::cli {
 
+namespace {
+
+struct OdometryArgs {
+  std::string sequence, mode = "stereo", config, preset = "default", out, camera_file;
+  int first = 0;
+  int count = -1;
+  bool ply = false;
+  bool no_progress = false;
+};
+
+void Run(const OdometryArgs& args) {
+  const vo::OdometryMode mode = vo::ParseOdometryMode(args.mode);
+  vo::OdometryOptions options = vo::OdometryOptions::Preset(args.preset);
+  if (!args.config.empty()) options = vo::LoadOdometryOptions(args.config, options);
+  options.Check();
+  const std::unique_ptr<SequenceReader> sequence = OpenSequence(args.sequence, args.camera_file);
+  const StereoCamera& cam = sequence->camera();
+  std::cout << "dvso odometry: " << args.sequence << " (" << sequence->size() << " frames, " << cam.left.width << "x"
+            << cam.left.height << ", fx " << cam.left.fx << ", baseline " << cam.baseline << " m)\n"
+            << "mode: " << vo::ToString(mode) << ", preset: " << args.preset
+            << (args.config.empty() ? "" : ", config: " + args.config) << "\n"
+            << "--- config ---\n"
+            << vo::OdometryOptionsToYaml(options) << "--------------\n";
+  vo::SequenceRunOptions run;
+  run.first = args.first;
+  run.count = args.count;
+  run.write_ply = args.ply;
+  run.progress = !args.no_progress;
+  const vo::SequenceRunSummary s = vo::RunOdometryOnSequence(*sequence, options, mode, args.out, run);
+  std::cout << "frames " << s.frames << ", keyframes " << s.keyframes << ", lost " << s.lost << ", initializing "
+            << s.initializing << ", re-initialisations " << s.resets << "\n"
+            << "mean " << s.mean_ms << " ms/frame (max " << s.max_ms << " ms)\n";
+  if (args.ply) std::cout << "points.ply: " << s.ply_points << " points\n";
+  std::cout << "written: " << args.out << "/trajectory.txt, trajectory_tum.txt, run_log.csv, config.yaml"
+            << (args.ply ? ", points.ply" : "") << "\n";
+}
+
+}  // namespace
+
 void AddOdometryCommand(CLI::App& app) {
-  auto* cmd = app.add_subcommand("odometry", "Direct sparse odometry (mono, stereo, virtual stereo) (not implemented yet)");
-  cmd->allow_extras();
-  cmd->callback([] { throw Error("'dvso odometry' is not implemented yet"); });
+  auto args = std::make_shared<OdometryArgs>();
+  auto* cmd = app.add_subcommand("odometry", "Direct sparse odometry (mono or stereo) over a sequence");
+  cmd->add_option("--sequence", args->sequence, "Sequence directory (KITTI layout, EuRoC, or image folder)")
+      ->required();
+  cmd->add_option("--mode", args->mode, "mono | stereo")->check(CLI::IsMember({"mono", "stereo"}));
+  cmd->add_option("--config", args->config, "YAML options (strict keys; applied on top of the preset)");
+  cmd->add_option("--preset", args->preset, "default (2000 points) | fast (800 points)")
+      ->check(CLI::IsMember({"default", "fast"}));
+  cmd->add_option("--out", args->out, "Output directory")->required();
+  cmd->add_option("--first", args->first, "First frame index");
+  cmd->add_option("--count", args->count, "Number of frames (-1 = all)");
+  cmd->add_option("--camera", args->camera_file, "DSO camera file (image-folder sequences only)");
+  cmd->add_flag("--ply", args->ply, "Also write points.ply (marginalised points)");
+  cmd->add_flag("--no-progress", args->no_progress, "No progress bar");
+  cmd->callback([args] { Run(*args); });
 }
 
 }  // namespace dvso::cli

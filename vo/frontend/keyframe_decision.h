@@ -11,8 +11,8 @@ namespace dvso::vo {
 
 struct KeyframeDecisionOptions {
   double global_weight = 1.0;           // scales all flow/affine terms (DSO setting_kfGlobalWeight)
-  double max_shift_weight_t = 0.04 * (640 + 480);   // translation-only flow weight (DSO setting_maxShiftWeightT)
-  double max_shift_weight_rt = 0.02 * (640 + 480);  // full flow weight (DSO setting_maxShiftWeightRT)
+  double max_shift_weight_t = 44.8;     // translation-only flow weight, 0.04 * (640 + 480) (DSO setting_maxShiftWeightT)
+  double max_shift_weight_rt = 22.4;    // full flow weight, 0.02 * (640 + 480) (DSO setting_maxShiftWeightRT)
   double max_affine_weight = 2.0;       // weight of |log brightness ratio| (DSO setting_maxAffineWeight)
   double rmse_growth_factor = 2.0;      // keyframe when rmse > factor * first rmse after the reference (DSO: 2)
   int max_frames_between = 0;           // force a keyframe after this many frames (0 = never force)

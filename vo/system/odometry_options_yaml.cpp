@@ -1,6 +1,10 @@
 // YAML (de)serialisation of OdometryOptions. One visitor lists every field once,
 // so load, save and print can never disagree about the keys.
+#include <cstdio>
+#include <cstdlib>
 #include <fstream>
+#include <map>
+#include <type_traits>
 #include <sstream>
 #include <yaml-cpp/yaml.h>
 
@@ -100,9 +104,15 @@ void VisitFields(Options& o, Visitor&& v) {
 
 OdometryOptions FromSection(YamlSection& root, const OdometryOptions& base) {
   OdometryOptions o = base;
-  VisitFields(o, [&root](const char* section, const char* key, auto& field) {
-    YamlSection& s = section[0] == '\0' ? root : root.Child(section);
-    s.Read(key, &field);
+  std::map<std::string, YamlSection*> children;  // one child per section, so its used keys accumulate
+  VisitFields(o, [&root, &children](const char* section, const char* key, auto& field) {
+    YamlSection* s = &root;
+    if (section[0] != '\0') {
+      auto it = children.find(section);
+      if (it == children.end()) it = children.emplace(section, &root.Child(section)).first;
+      s = it->second;
+    }
+    s->Read(key, &field);
   });
   root.RequireAllKeysUsed();
   try {
@@ -129,10 +139,18 @@ std::string OdometryOptionsToYaml(const OdometryOptions& options) {
   YAML::Node root;
   OdometryOptions copy = options;
   VisitFields(copy, [&root](const char* section, const char* key, auto& field) {
-    if (section[0] == '\0') {
-      root[key] = field;
+    YAML::Node node = section[0] == '\0' ? root[key] : root[section][key];
+    using T = std::decay_t<decltype(field)>;
+    if constexpr (std::is_same_v<T, double>) {
+      // Shortest text that reads back exactly ("0.2", not "0.20000000000000001").
+      char text[64];
+      for (int digits = 6; digits <= 17; ++digits) {
+        std::snprintf(text, sizeof(text), "%.*g", digits, field);
+        if (std::strtod(text, nullptr) == field) break;
+      }
+      node = std::string(text);
     } else {
-      root[section][key] = field;
+      node = field;
     }
   });
   YAML::Emitter out;

@@ -1,0 +1,77 @@
+#include "vo/system/sequence_runner.h"
+
+#include <algorithm>
+#include <memory>
+#include <sstream>
+
+#include "core/error.h"
+#include "core/fs_util.h"
+#include "core/progress.h"
+#include "core/trajectory.h"
+#include "vo/system/output_writers.h"
+#include "vo/system/system.h"
+
+namespace dvso::vo {
+
+void SequenceRunOptions::Check() const {
+  Require(first >= 0, "--first must be >= 0");
+  Require(count == -1 || count >= 1, "--count must be >= 1 (or -1 for all)");
+}
+
+SequenceRunSummary RunOdometryOnSequence(const SequenceReader& sequence, const OdometryOptions& options,
+                                         OdometryMode mode, const std::string& out_dir,
+                                         const SequenceRunOptions& run) {
+  run.Check();
+  options.Check();
+  if (mode == OdometryMode::kStereo) Require(sequence.is_stereo(), sequence.root() + ": stereo mode needs a stereo sequence");
+  Require(run.first < sequence.size(), "--first " + std::to_string(run.first) + " is beyond the sequence (" +
+                                           std::to_string(sequence.size()) + " frames)");
+  const int end = run.count < 0 ? sequence.size() : std::min(sequence.size(), run.first + run.count);
+  EnsureDirectory(out_dir);
+  SaveOdometryOptions(JoinPath(out_dir, "config.yaml"), options);
+
+  System system(options, sequence.camera(), mode);
+  TrajectoryRecorder recorder;
+  RunLogWriter log(JoinPath(out_dir, "run_log.csv"));
+  std::unique_ptr<PlyPointWriter> ply;
+  system.AddObserver(&recorder);
+  system.AddObserver(&log);
+  if (run.write_ply) {
+    ply = std::make_unique<PlyPointWriter>(JoinPath(out_dir, "points.ply"));
+    system.AddObserver(ply.get());
+  }
+  for (OdometryObserver* o : run.extra_observers) system.AddObserver(o);
+  SequenceRunSummary summary;
+  std::unique_ptr<ProgressBar> bar;
+  if (run.progress) bar = std::make_unique<ProgressBar>("odometry " + ToString(mode), end - run.first);
+  SequenceReadOptions read;
+  read.load_right = mode == OdometryMode::kStereo;
+  double total_ms = 0;
+  for (int i = run.first; i < end; ++i) {
+    const StereoFrame frame = sequence.Read(i, read);
+    const FrameEvent ev = system.ProcessFrame(i, frame.timestamp, frame.left, frame.right);
+    total_ms += ev.total_ms;
+    summary.max_ms = std::max(summary.max_ms, ev.total_ms);
+    ++summary.frames;
+    if (bar) {
+      std::ostringstream status;
+      status << ToString(ev.status) << " kf " << system.num_keyframes_total() << " pts " << ev.active_points << " "
+             << static_cast<int>(total_ms / summary.frames) << " ms/f";
+      bar->Update(i - run.first + 1, status.str());
+    }
+  }
+  system.Finish();
+  if (bar) bar->Finish();
+  const Trajectory trajectory = recorder.Resolve();
+  WriteKittiTrajectory(JoinPath(out_dir, "trajectory.txt"), trajectory);
+  WriteTumTrajectory(JoinPath(out_dir, "trajectory_tum.txt"), trajectory);
+  summary.keyframes = system.num_keyframes_total();
+  summary.lost = recorder.CountStatus(FrameStatus::kLost);
+  summary.initializing = recorder.CountStatus(FrameStatus::kInitializing);
+  summary.resets = system.num_resets();
+  summary.mean_ms = summary.frames > 0 ? total_ms / summary.frames : 0;
+  summary.ply_points = ply ? ply->num_points() : 0;
+  return summary;
+}
+
+}  // namespace dvso::vo
