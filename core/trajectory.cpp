@@ -109,7 +109,10 @@ void WriteTumTrajectory(const std::string& path, const Trajectory& trajectory) {
     for (const auto& p : trajectory.poses) {
       const Eigen::Quaterniond q(p.T_world_camera.linear());
       const Eigen::Vector3d t = p.T_world_camera.translation();
-      out << p.timestamp << ' ' << t.x() << ' ' << t.y() << ' ' << t.z() << ' ' << q.x() << ' '
+      // Timestamps get fixed nanosecond precision: Unix times (~1.5e9 s) need
+      // more than 12 significant digits.
+      out << std::fixed << std::setprecision(9) << p.timestamp << std::defaultfloat << std::setprecision(12)
+          << ' ' << t.x() << ' ' << t.y() << ' ' << t.z() << ' ' << q.x() << ' '
           << q.y() << ' ' << q.z() << ' ' << q.w() << '\n';
     }
     RequireFile(out.good(), path, "error while writing trajectory");

@@ -1,14 +1,91 @@
-// PLACEHOLDER until the owning issue lands: registers `dvso labels` so the CLI
-// lists it, and fails loudly when run.
+// `dvso labels`: sparse disparity labels from Stereo DSO (issue 4).
+#include <filesystem>
+#include <iostream>
+#include <memory>
+
 #include "core/error.h"
+#include "core/fs_util.h"
 #include "pipelines/commands.h"
+#include "sdso_labels/label_runner.h"
 
 namespace dvso::cli {
 
+namespace {
+
+struct LabelsArgs {
+  std::string sequence, list, out, config, gt_disparity, gt_subdir, preset = "default";
+  int first = 0, count = -1;
+  bool json = false, overwrite = false, quiet = false;
+};
+
+void RunLabels(const LabelsArgs& args) {
+  Require(args.sequence.empty() != args.list.empty(), "give exactly one of --sequence DIR or --list FILE");
+  Require(args.gt_disparity.empty() || args.list.empty(),
+          "--gt-disparity is for one sequence; with --list use --gt-subdir NAME (e.g. disp_0)");
+  labels::LabelRunOptions options;
+  if (!args.config.empty()) {
+    options = labels::LoadLabelRunOptions(args.config);
+  } else {
+    options.odometry = vo::OdometryOptions::Preset(args.preset);
+  }
+  options.first = args.first;
+  options.count = args.count;
+  options.labels.overwrite = args.overwrite;
+  options.progress = !args.quiet;
+  options.Check();
+  if (!args.json) {
+    std::cout << "# dvso labels configuration" << (args.config.empty() ? " (preset " + args.preset + ")" : " (" + args.config + ")")
+              << "\n" << labels::LabelRunOptionsToYaml(options) << std::endl;
+  }
+  const std::vector<std::string> sequences =
+      args.list.empty() ? std::vector<std::string>{args.sequence} : labels::ReadSequenceList(args.list);
+  nlohmann::json all = nlohmann::json::array();
+  labels::LabelStatistics total;
+  for (size_t s = 0; s < sequences.size(); ++s) {
+    const std::string& sequence = sequences[s];
+    const std::string out = args.list.empty()
+                                ? args.out
+                                : JoinPath(args.out, std::filesystem::path(sequence).lexically_normal().filename().string());
+    labels::LabelRunOptions run = options;
+    run.gt_disparity_dir = !args.gt_disparity.empty() ? args.gt_disparity
+                           : !args.gt_subdir.empty()  ? JoinPath(sequence, args.gt_subdir)
+                                                      : "";
+    if (!args.quiet && sequences.size() > 1) {
+      std::cerr << "[" << s + 1 << "/" << sequences.size() << "] " << sequence << std::endl;
+    }
+    const labels::LabelRunSummary summary = labels::RunLabelExtraction(sequence, out, run);
+    all.push_back(summary.ToJson());
+    if (!args.json) {
+      std::cout << "== " << sequence << " -> " << out << (summary.skipped_complete ? " (complete, skipped)" : "") << "\n"
+                << summary.statistics.ToText();
+      if (!summary.skipped_complete) {
+        std::cout << "speed:                  " << summary.odometry_ms_per_frame << " ms/frame odometry, "
+                  << summary.total_ms_per_frame << " ms/frame total\n";
+      }
+      std::cout << std::flush;
+    }
+  }
+  if (args.json) std::cout << (all.size() == 1 ? all[0] : all).dump(2) << std::endl;
+}
+
+}  // namespace
+
 void AddLabelsCommand(CLI::App& app) {
-  auto* cmd = app.add_subcommand("labels", "Sparse disparity labels from stereo odometry (not implemented yet)");
-  cmd->allow_extras();
-  cmd->callback([] { throw Error("'dvso labels' is not implemented yet"); });
+  auto args = std::make_shared<LabelsArgs>();
+  auto* cmd = app.add_subcommand("labels", "Sparse disparity labels (KITTI uint16 PNG) from Stereo DSO");
+  cmd->add_option("--sequence", args->sequence, "Stereo sequence directory (KITTI layout or EuRoC)");
+  cmd->add_option("--list", args->list, "Batch: file listing one sequence directory per line");
+  cmd->add_option("--out", args->out, "Output directory (batch: one subfolder per sequence)")->required();
+  cmd->add_option("--config", args->config, "YAML with 'labels:', 'odometry:' and 'preset:' keys");
+  cmd->add_option("--preset", args->preset, "Odometry preset without --config: default|fast");
+  cmd->add_option("--gt-disparity", args->gt_disparity, "GT disparity folder (%06d.png) for accuracy statistics");
+  cmd->add_option("--gt-subdir", args->gt_subdir, "Batch: GT disparity subfolder inside each sequence (e.g. disp_0)");
+  cmd->add_option("--first", args->first, "First frame index");
+  cmd->add_option("--count", args->count, "Number of frames (-1 = all)");
+  cmd->add_flag("--overwrite", args->overwrite, "Rewrite existing label files (default: resume)");
+  cmd->add_flag("--json", args->json, "Print the summary as JSON");
+  cmd->add_flag("--quiet", args->quiet, "No progress bars");
+  cmd->callback([args] { RunLabels(*args); });
 }
 
 }  // namespace dvso::cli

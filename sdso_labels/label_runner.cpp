@@ -1,0 +1,161 @@
+#include "sdso_labels/label_runner.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "core/config_yaml.h"
+#include "core/disparity_io.h"
+#include "core/error.h"
+#include "core/fs_util.h"
+#include "core/sequence.h"
+#include "vo/system/sequence_runner.h"
+
+namespace dvso::labels {
+
+namespace fs = std::filesystem;
+
+void LabelRunOptions::Check() const {
+  labels.Check();
+  odometry.Check();
+  Require(first >= 0, "labels: first must be >= 0");
+  Require(count == -1 || count >= 1, "labels: count must be >= 1 (or -1 for all)");
+}
+
+LabelRunOptions LoadLabelRunOptions(const std::string& path) {
+  YamlSection root = YamlSection::FromFile(path);
+  LabelRunOptions options;
+  std::string preset = "default";
+  root.Read("preset", &preset);
+  options.odometry = vo::OdometryOptions::Preset(preset);
+  YamlSection& labels = root.Child("labels");
+  labels.Read("min_good_residuals", &options.labels.min_good_residuals);
+  labels.Read("max_depth", &options.labels.max_depth);
+  labels.Read("occlusion_radius", &options.labels.projection.occlusion_radius);
+  labels.Read("occlusion_margin", &options.labels.projection.occlusion_margin);
+  labels.Read("min_depth", &options.labels.projection.min_depth);
+  labels.Read("max_disparity", &options.labels.projection.max_disparity);
+  root.Child("odometry");  // validated strictly by the odometry's own loader below
+  root.RequireAllKeysUsed();
+  if (root.Has("odometry")) {
+    std::stringstream text;
+    text << root.node()["odometry"];
+    try {
+      options.odometry = vo::OdometryOptionsFromYamlString(text.str(), options.odometry);
+    } catch (const Error& e) {
+      throw Error(path, std::string("odometry section: ") + e.what());
+    }
+  }
+  options.Check();
+  return options;
+}
+
+std::string LabelRunOptionsToYaml(const LabelRunOptions& options) {
+  std::ostringstream out;
+  const auto& l = options.labels;
+  out << "labels:\n"
+      << "  min_good_residuals: " << l.min_good_residuals << "\n"
+      << "  max_depth: " << l.max_depth << "\n"
+      << "  occlusion_radius: " << l.projection.occlusion_radius << "\n"
+      << "  occlusion_margin: " << l.projection.occlusion_margin << "\n"
+      << "  min_depth: " << l.projection.min_depth << "\n"
+      << "  max_disparity: " << l.projection.max_disparity << "\n"
+      << "odometry:\n";
+  std::istringstream odometry(vo::OdometryOptionsToYaml(options.odometry));
+  for (std::string line; std::getline(odometry, line);) out << "  " << line << "\n";
+  return out.str();
+}
+
+nlohmann::json LabelRunSummary::ToJson() const {
+  nlohmann::json j = statistics.ToJson();
+  j["sequence"] = sequence;
+  j["skipped_complete"] = skipped_complete;
+  j["odometry_ms_per_frame"] = odometry_ms_per_frame;
+  j["total_ms_per_frame"] = total_ms_per_frame;
+  return j;
+}
+
+namespace {
+
+cv::Mat GroundTruth(const LabelRunOptions& options, int frame_index) {
+  if (options.gt_disparity_dir.empty()) return cv::Mat();
+  return ReadKittiMapPng(JoinPath(options.gt_disparity_dir, FrameFileName(frame_index, ".png")));
+}
+
+}  // namespace
+
+LabelRunSummary RunLabelExtraction(const std::string& sequence_dir, const std::string& out_dir,
+                                   const LabelRunOptions& options) {
+  options.Check();
+  const auto sequence = OpenSequence(sequence_dir);
+  Require(sequence->is_stereo(), sequence_dir + ": labels need a stereo sequence (image_1/ and a baseline in calib.txt)");
+  if (!options.gt_disparity_dir.empty()) {
+    RequireFile(fs::is_directory(options.gt_disparity_dir), options.gt_disparity_dir,
+                "ground-truth disparity folder does not exist");
+  }
+  Require(options.first < sequence->size(), sequence_dir + ": first frame beyond the sequence");
+  const int end = options.count < 0 ? sequence->size() : std::min(sequence->size(), options.first + options.count);
+  EnsureDirectory(out_dir);
+
+  LabelRunSummary summary;
+  summary.sequence = sequence_dir;
+  bool complete = !options.labels.overwrite;
+  for (int i = options.first; complete && i < end; ++i) {
+    complete = fs::exists(JoinPath(out_dir, FrameFileName(i, ".png")));
+  }
+  if (complete) {
+    // Resume: every label file is there (written atomically, so complete); only re-read for the summary.
+    summary.skipped_complete = true;
+    for (int i = options.first; i < end; ++i) {
+      summary.statistics.AddFrame(ReadKittiMapPng(JoinPath(out_dir, FrameFileName(i, ".png"))),
+                                  GroundTruth(options, i));
+    }
+  } else {
+    LabelWriter writer(sequence->camera(), options.labels, out_dir, [&](int frame_index, const cv::Mat& labels) {
+      summary.statistics.AddFrame(labels, GroundTruth(options, frame_index));
+    });
+    vo::SequenceRunOptions run;
+    run.first = options.first;
+    run.count = end - options.first;
+    run.progress = options.progress;
+    run.extra_observers.push_back(&writer);
+    const auto start = std::chrono::steady_clock::now();
+    const vo::SequenceRunSummary odometry =
+        vo::RunOdometryOnSequence(*sequence, options.odometry, vo::OdometryMode::kStereo, JoinPath(out_dir, "odometry"), run);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    summary.odometry_ms_per_frame = odometry.mean_ms;
+    summary.total_ms_per_frame = 1000.0 * seconds / std::max(1, odometry.frames);
+    Require(writer.frames_written() == end - options.first,
+            sequence_dir + ": label writer finished " + std::to_string(writer.frames_written()) + " of " +
+                std::to_string(end - options.first) + " frames");
+  }
+  const std::string json_path = JoinPath(out_dir, "labels_summary.json");
+  WriteAtomically(json_path, [&](const std::string& temp) {
+    std::ofstream out(temp);
+    out << summary.ToJson().dump(2) << "\n";
+    RequireFile(out.good(), json_path, "cannot write summary");
+  });
+  return summary;
+}
+
+std::vector<std::string> ReadSequenceList(const std::string& list_path) {
+  std::ifstream in(list_path);
+  RequireFile(in.good(), list_path, "cannot open sequence list");
+  const fs::path base = fs::path(list_path).parent_path();
+  std::vector<std::string> sequences;
+  for (std::string line; std::getline(in, line);) {
+    const auto first = line.find_first_not_of(" \t\r");
+    if (first == std::string::npos || line[first] == '#') continue;
+    const auto last = line.find_last_not_of(" \t\r");
+    fs::path p(line.substr(first, last - first + 1));
+    if (p.is_relative()) p = base / p;
+    sequences.push_back(p.string());
+  }
+  RequireFile(!sequences.empty(), list_path, "lists no sequences");
+  return sequences;
+}
+
+}  // namespace dvso::labels

@@ -1,0 +1,50 @@
+// `dvso labels`: stereo odometry over one or many sequences with a
+// LabelWriter attached; resumable, with a summary per sequence and overall.
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "sdso_labels/label_stats.h"
+#include "sdso_labels/label_writer.h"
+#include "vo/system/odometry_options.h"
+
+namespace dvso::labels {
+
+struct LabelRunOptions {
+  LabelOptions labels;              // point filters and occlusion handling
+  vo::OdometryOptions odometry;     // the stereo odometry (default preset)
+  int first = 0;                    // first frame index of each sequence
+  int count = -1;                   // frames per sequence (-1 = all)
+  std::string gt_disparity_dir;     // optional GT disparity folder (%06d.png) for accuracy statistics
+  bool progress = true;             // progress bars on stderr
+
+  void Check() const;
+};
+
+// Loads `labels:` and `odometry:` sections (strict keys) plus an optional
+// `preset:` (default|fast) for the odometry; absent keys keep the defaults.
+LabelRunOptions LoadLabelRunOptions(const std::string& path);
+std::string LabelRunOptionsToYaml(const LabelRunOptions& options);
+
+struct LabelRunSummary {
+  std::string sequence;
+  bool skipped_complete = false;  // all label files existed: odometry not run (resume)
+  double odometry_ms_per_frame = 0;
+  double total_ms_per_frame = 0;  // odometry + label extraction + writing (excl. image loading)
+  LabelStatistics statistics;
+
+  nlohmann::json ToJson() const;
+};
+
+// Writes out_dir/%06d.png for every frame, out_dir/odometry/ (trajectory,
+// run log, config) and out_dir/labels_summary.json.
+LabelRunSummary RunLabelExtraction(const std::string& sequence_dir, const std::string& out_dir,
+                                   const LabelRunOptions& options);
+
+// Reads a batch list: one sequence directory per line ('#' comments, blank
+// lines ignored; relative paths are relative to the list file).
+std::vector<std::string> ReadSequenceList(const std::string& list_path);
+
+}  // namespace dvso::labels
