@@ -24,6 +24,8 @@ struct Placement {
   double U(double lo, double hi) { return lo + (hi - lo) * unit(rng); }
   bool Chance(double p) { return unit(rng) < p; }
   const PathSample& At(double s) const { return path.samples()[path.SampleAt(s)]; }
+  // Revisits of an earlier street get no objects of their own.
+  bool Merged(double s) const { return At(s).merged_into >= 0; }
   // Horizontal tangent at arc length s.
   Vec3 Point(double s, double lateral) const { return At(s).road + At(s).right * lateral; }
   double Edge(const PathSample& p, int side) const { return side == 0 ? -p.profile.left_edge : p.profile.right_edge; }
@@ -94,6 +96,10 @@ void BuildingRow(Placement& pl, int side, bool far, double s_begin, double s_end
   const double sign = side == 0 ? -1.0 : 1.0;
   double s = s_begin + pl.U(0, 10);
   while (s < s_end) {
+    if (pl.Merged(s)) {
+      s += 2.0;
+      continue;
+    }
     const PathSample& p = pl.At(s);
     const double density = far ? 0.85 : pl.options.building_density * (p.profile.green ? 0.5 : 1.0);
     if (!pl.Chance(density)) {
@@ -162,6 +168,10 @@ void ParkedCars(Placement& pl, int side, double s_begin, double s_end) {
   const double sign = side == 0 ? -1.0 : 1.0;
   double s = s_begin + pl.U(0, 8);
   while (s < s_end) {
+    if (pl.Merged(s)) {
+      s += 2.0;
+      continue;
+    }
     const PathSample& p = pl.At(s);
     const bool parking = side == 0 ? p.profile.parking_left : p.profile.parking_right;
     if (!parking || !pl.Chance(pl.options.car_density)) {
@@ -182,7 +192,7 @@ void AddTree(Placement& pl, const Vec3& base, double trunk_height, double crown_
   pl.builder->BeginChunk();
   Surface bark = Textured(kTexBark, {0.55f, 0.45f, 0.38f}, 0.f, 0.f);
   pl.builder->AddCylinder(base - up * 0.3, pl.U(0.12, 0.25), trunk_height + 0.3 + crown_v * 0.5, 8, bark, 1.0);
-  Surface leaves = Textured(kTexLeaves, Eigen::Vector3f(0.45f, 0.62f, 0.30f) * static_cast<float>(pl.U(0.85, 1.15)),
+  Surface leaves = Textured(kTexLeaves, Eigen::Vector3f(0.62f, 0.80f, 0.42f) * static_cast<float>(pl.U(0.85, 1.15)),
                             0.3f, 0.4f);
   pl.builder->AddBlob(base + up * (trunk_height + crown_v * 0.8), crown_h, crown_v, leaves, 1.5, pl.rng());
   pl.builder->EndChunk();
@@ -193,6 +203,10 @@ void Vegetation(Placement& pl, int side, double s_begin, double s_end) {
   const double sign = side == 0 ? -1.0 : 1.0;
   double s = s_begin + pl.U(0, 10);
   while (s < s_end) {
+    if (pl.Merged(s)) {
+      s += 2.0;
+      continue;
+    }
     const PathSample& p = pl.At(s);
     const double density = pl.options.tree_density * (p.profile.green ? 1.0 : 0.4);
     const double gap = p.profile.green ? pl.U(6, 14) : pl.U(10, 25);
@@ -213,7 +227,7 @@ void Vegetation(Placement& pl, int side, double s_begin, double s_end) {
       // Hedge or bush behind the verge.
       const double lateral = pl.Edge(p, side) + pl.Walk(p, side) + pl.U(0.5, 2.0);
       const Vec3 base = p.road + p.right * (sign * lateral) + pl.builder->up() * pl.options.curb_height;
-      Surface leaves = Textured(kTexLeaves, {0.40f, 0.55f, 0.28f}, 0.2f, 0.3f);
+      Surface leaves = Textured(kTexLeaves, {0.55f, 0.72f, 0.38f}, 0.2f, 0.3f);
       if (pl.Chance(0.5)) {
         const double length = pl.U(4, 12);
         const Vec3 centre = base + p.right * (sign * 0.6);
@@ -239,6 +253,10 @@ void PolesAndSigns(Placement& pl, int side, double s_begin, double s_end) {
   double s = s_begin + pl.U(0, 20);
   Surface metal = Textured(kTexMetal, {0.75f, 0.77f, 0.80f}, 0.2f, 0.2f);
   while (s < s_end) {
+    if (pl.Merged(s)) {
+      s += 2.0;
+      continue;
+    }
     const PathSample& p = pl.At(s);
     const double lateral = pl.Edge(p, side) + 0.45;
     const Vec3 base = p.road + p.right * (sign * lateral) + up * pl.options.curb_height;

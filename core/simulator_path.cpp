@@ -119,6 +119,7 @@ bool StreetPath::InZone(const Eigen::Vector3d& q, Zone zone, double margin, int 
       for (int j : it->second) {
         if (j >= ignore_begin && j < ignore_end) continue;
         const PathSample& sample = samples_[j];
+        if (sample.merged_into >= 0 && zone != Zone::kLane) continue;
         const Eigen::Vector3d d = q - sample.road;
         if (std::abs(d.dot(down_)) > 4.0) continue;  // over- or underpass
         if (std::abs(d.dot(sample.tangent)) > 0.75 * spacing_ + 0.1) continue;
@@ -136,6 +137,56 @@ bool StreetPath::InZone(const Eigen::Vector3d& q, Zone zone, double margin, int 
       }
     }
   return false;
+}
+
+void StreetPath::MergeRevisits(double radius, double min_gap) {
+  const int n = static_cast<int>(samples_.size());
+  for (int j = 0; j < n; ++j) {
+    PathSample& b = samples_[j];
+    const auto cell = Cell(b.road);
+    int best = -1;
+    double best_distance = radius;
+    for (int da = -1; da <= 1; ++da)
+      for (int db = -1; db <= 1; ++db) {
+        const int64_t key = (static_cast<int64_t>(cell.first + da) << 32) ^ static_cast<uint32_t>(cell.second + db);
+        const auto it = grid_.find(key);
+        if (it == grid_.end()) continue;
+        for (int i : it->second) {
+          const PathSample& a = samples_[i];
+          if (i >= j || b.s - a.s < min_gap || a.merged_into >= 0) continue;
+          const Eigen::Vector3d d = b.road - a.road;
+          if (std::abs(d.dot(down_)) > 2.0 || std::abs(a.tangent.dot(b.tangent)) < 0.85) continue;
+          const double distance = (d - d.dot(down_) * down_).norm();
+          if (distance < best_distance) {
+            best_distance = distance;
+            best = i;
+          }
+        }
+      }
+    if (best < 0) continue;
+    b.merged_into = best;
+    // Widen the earlier street so that the revisit's lane (+-2 m) is road.
+    for (int k = std::max(0, best - 2); k <= std::min(n - 1, best + 2); ++k) {
+      StreetProfile& p = samples_[k].profile;
+      const double lateral = (b.road - samples_[k].road).dot(samples_[k].right);
+      p.left_edge = std::min(p.left_edge, lateral - 2.0);
+      p.right_edge = std::max(p.right_edge, lateral + 2.0);
+    }
+  }
+  // Spread the widening over +-3 samples, so that curbs run smoothly.
+  std::vector<double> left(n), right(n);
+  for (int j = 0; j < n; ++j) {
+    left[j] = samples_[j].profile.left_edge;
+    right[j] = samples_[j].profile.right_edge;
+    for (int k = std::max(0, j - 3); k <= std::min(n - 1, j + 3); ++k) {
+      left[j] = std::min(left[j], samples_[k].profile.left_edge);
+      right[j] = std::max(right[j], samples_[k].profile.right_edge);
+    }
+  }
+  for (int j = 0; j < n; ++j) {
+    samples_[j].profile.left_edge = left[j];
+    samples_[j].profile.right_edge = right[j];
+  }
 }
 
 std::vector<Eigen::Isometry3d> GenerateDrivingPath(int num_poses, double speed, double frame_interval,

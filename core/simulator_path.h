@@ -32,6 +32,10 @@ struct PathSample {
   Eigen::Vector3d right;    // horizontal unit vector to the right (down x tangent)
   double s = 0;             // arc length (m, horizontal), 0 at the first pose
   StreetProfile profile;
+  // >= 0 when this part of the path drives again along an earlier part of
+  // the same street (a revisit): the sample then builds no street or objects
+  // of its own; the earlier sample's street is widened to hold its lane.
+  int merged_into = -1;
 };
 
 // Where a point may lie relative to the streets (for object placement).
@@ -58,10 +62,14 @@ class StreetPath {
   double PoseArcLength(int i) const { return pose_s_[i]; }
   // Index of the sample nearest to arc length s (clamped).
   int SampleAt(double s) const;
+  // Marks revisits (samples within `radius` m of an earlier sample at least
+  // `min_gap` m of arc length before, driving parallel or anti-parallel) as
+  // merged and widens the earlier sample's road to contain their lane.
+  void MergeRevisits(double radius, double min_gap);
 
   // True when the horizontal position of q lies in `zone` of any sample
   // (grown by margin metres), optionally ignoring samples with index in
-  // [ignore_begin, ignore_end).
+  // [ignore_begin, ignore_end). Merged samples count only for Zone::kLane.
   bool InZone(const Eigen::Vector3d& q, Zone zone, double margin, int ignore_begin = 0,
               int ignore_end = 0) const;
 

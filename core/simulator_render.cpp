@@ -76,6 +76,9 @@ RenderedView Renderer::Render(const Eigen::Isometry3d& T_world_camera, const Pho
       const Triangle& tri = scene_.triangles[t];
       Eigen::Vector3d v[3];
       for (int k = 0; k < 3; ++k) v[k] = Rt * (tri.v[k] - C);
+      // Every surface is the outside of a closed object or ground seen from
+      // above, so back faces are hidden: skip them (halves the overdraw).
+      if (tri.normal.dot(C - tri.v[0]) <= 0) continue;
       bool culled = false;
       for (const auto& p : side_planes) culled |= p.dot(v[0]) < 0 && p.dot(v[1]) < 0 && p.dot(v[2]) < 0;
       if (culled || (v[0].z() < kNearPlane && v[1].z() < kNearPlane && v[2].z() < kNearPlane)) continue;
@@ -171,30 +174,40 @@ RenderedView Renderer::Render(const Eigen::Isometry3d& T_world_camera, const Pho
       for (int i : bins[tile]) {
         const ScreenTriangle& st = screen[i];
         for (int y = std::max(row0, st.y0); y <= std::min(row1 - 1, st.y1); ++y) {
-          // Conservative span of the row from the three edges, exact test per pixel.
+          // Span of the row from the three edges. Pixels more than one pixel
+          // inside the span are inside for sure; only the few pixels near its
+          // ends need the exact (tie-breaking) edge test.
           double lo = st.x0, hi = st.x1;
+          double span_lo = -1e300, span_hi = 1e300;
           bool empty = false;
           for (int e = 0; e < 3; ++e) {
             const double k = st.eb[e] * y + st.ec[e];
             if (st.ea[e] > 0) {
-              lo = std::max(lo, std::floor(-k / st.ea[e]) - 1);
+              span_lo = std::max(span_lo, -k / st.ea[e]);
             } else if (st.ea[e] < 0) {
-              hi = std::min(hi, std::ceil(-k / st.ea[e]) + 1);
-            } else if (k < 0) {
-              empty = true;
+              span_hi = std::min(span_hi, -k / st.ea[e]);
+            } else if (k < 0 || (k == 0 && !st.include_zero[e])) {
+              empty = true;  // the row lies outside a horizontal edge
             }
           }
-          if (empty || lo > hi) continue;
+          if (empty) continue;
+          lo = std::max(lo, std::floor(std::max(span_lo, -1e9)) - 1);
+          hi = std::min(hi, std::ceil(std::min(span_hi, 1e9)) + 1);
+          if (lo > hi) continue;
+          const double sure_lo = span_lo + 1.0, sure_hi = span_hi - 1.0;
           float* zrow = &zbuf[static_cast<size_t>(y - row0) * width];
           int* idrow = &ids[static_cast<size_t>(y - row0) * width];
+          const double iz_row = st.iq * y + st.ir;
           for (int x = static_cast<int>(lo); x <= static_cast<int>(hi); ++x) {
-            bool inside = true;
-            for (int e = 0; e < 3 && inside; ++e) {
-              const double val = st.ea[e] * x + st.eb[e] * y + st.ec[e];
-              inside = val > 0 || (val == 0 && st.include_zero[e]);
+            if (x <= sure_lo || x >= sure_hi) {
+              bool inside = true;
+              for (int e = 0; e < 3 && inside; ++e) {
+                const double val = st.ea[e] * x + st.eb[e] * y + st.ec[e];
+                inside = val > 0 || (val == 0 && st.include_zero[e]);
+              }
+              if (!inside) continue;
             }
-            if (!inside) continue;
-            const float iz = static_cast<float>(st.ip * x + st.iq * y + st.ir);
+            const float iz = static_cast<float>(st.ip * x + iz_row);
             if (iz > zrow[x]) {
               zrow[x] = iz;
               idrow[x] = i;

@@ -128,10 +128,12 @@ void SceneBuilder::AddBlob(const Eigen::Vector3d& center, double radius_h, doubl
   // Radial noise per direction (hash of the rounded direction, so that
   // duplicated edge midpoints move together and the surface stays closed).
   auto bump = [&](const Eigen::Vector3d& d) {
-    const int64_t kx = std::lround(d.x() * 1000), ky = std::lround(d.y() * 1000), kz = std::lround(d.z() * 1000);
-    std::seed_seq seq{static_cast<uint64_t>(kx), static_cast<uint64_t>(ky), static_cast<uint64_t>(kz), seed};
-    std::mt19937 rng(seq);
-    return 0.85 + 0.3 * std::uniform_real_distribution<double>(0, 1)(rng);
+    uint64_t h = seed * 0x9E3779B97F4A7C15ull;
+    for (int k = 0; k < 3; ++k) {
+      h ^= static_cast<uint64_t>(std::llround(d[k] * 1000) + 4096) + 0x9E3779B97F4A7C15ull + (h << 6) + (h >> 2);
+      h = (h ^ (h >> 31)) * 0xBF58476D1CE4E5B9ull;
+    }
+    return 0.85 + 0.3 * static_cast<double>(h >> 11) / 9007199254740992.0;
   };
   const Eigen::Vector3d a = down_.unitOrthogonal(), b = down_.cross(a);
   auto place = [&](const Eigen::Vector3d& d) {
@@ -270,6 +272,7 @@ void BuildStreetSurfaces(const StreetPath& path, const SceneOptions& options, Sc
   for (int j = 0; j + 1 < n; ++j) {
     const PathSample& a = samples[j];
     const PathSample& b = samples[j + 1];
+    if (a.merged_into >= 0 && b.merged_into >= 0) continue;  // a revisit: the earlier street is reused
     auto at = [](const PathSample& s, double lateral) { return Eigen::Vector3d(s.road + s.right * lateral); };
     builder->BeginChunk();
     // Road with analytic markings in this segment's street coordinates.
@@ -298,8 +301,11 @@ void BuildStreetSurfaces(const StreetPath& path, const SceneOptions& options, Sc
       const double va = verge[side][j], vb = verge[side][j + 1];
       // Underlay: low dirt ground that closes every hole below the horizon.
       const Eigen::Vector3d sink = -0.3 * up;
-      builder->AddQuad(at(a, sign * ea) + sink, at(a, sign * under[side][j]) + sink,
-                       at(b, sign * under[side][j + 1]) + sink, at(b, sign * eb) + sink, up, underlay);
+      // It starts under the verge's outer edge (overdraw elsewhere would be wasted).
+      const double ua = junction[side][j] ? ea : std::max(ea, va - 1.0);
+      const double ub = junction[side][j + 1] ? eb : std::max(eb, vb - 1.0);
+      builder->AddQuad(at(a, sign * ua) + sink, at(a, sign * std::max(ua, under[side][j])) + sink,
+                       at(b, sign * std::max(ub, under[side][j + 1])) + sink, at(b, sign * ub) + sink, up, underlay);
       if (junction[side][j] || junction[side][j + 1]) {
         // Another street crosses here: asphalt instead of curb and sidewalk.
         builder->AddQuad(at(a, sign * ea), at(a, sign * (wa + 2)), at(b, sign * (wb + 2)), at(b, sign * eb), up,
@@ -347,6 +353,7 @@ Scene BuildStreetScene(StreetPath& path, const SceneOptions& options, uint64_t s
                   std::sin(elevation) * scene.down)
                      .normalized();
   AssignProfiles(path, seed);
+  path.MergeRevisits(4.0, 60.0);
   SceneBuilder builder(&scene, scene.down);
   BuildStreetSurfaces(path, options, &builder, &scene);
   PlaceStreetObjects(path, options, seed, &builder, &scene);

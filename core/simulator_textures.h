@@ -6,6 +6,7 @@
 // break the photo-consistency that direct odometry (DSO) relies on.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -56,10 +57,33 @@ class MipTexture {
   float SampleAniso(double u, double v, float dudx, float dvdx, float dudy, float dvdy,
                     int max_taps) const;
   // Bilinear lookup in mip level `level` at texel coordinates of that level.
-  float Bilinear(int level, float x, float y) const;
+  inline float Bilinear(int level, float x, float y) const {
+    const int n = sizes_[level], mask = n - 1;
+    const float* p = levels_[level].data();
+    x -= 0.5f;
+    y -= 0.5f;
+    const float flx = std::floor(x), fly = std::floor(y);
+    const float tx = x - flx, ty = y - fly;
+    const int x0 = static_cast<int>(flx) & mask, y0 = static_cast<int>(fly) & mask;
+    const int x1 = (x0 + 1) & mask, y1 = (y0 + 1) & mask;
+    const float a = p[y0 * n + x0], b = p[y0 * n + x1], c = p[y1 * n + x0], d = p[y1 * n + x1];
+    const float top = a + (b - a) * tx, bottom = c + (d - c) * tx;
+    return top + (bottom - top) * ty;
+  }
 
  private:
-  float Trilinear(float fu, float fv, float lod) const;
+  // Blend of the two mip levels around `lod` at (fu, fv) in [0, 1).
+  inline float Trilinear(float fu, float fv, float lod) const {
+    const int last = static_cast<int>(levels_.size()) - 1;
+    if (lod <= 0.f) return Bilinear(0, fu * sizes_[0], fv * sizes_[0]);
+    if (lod >= last) return levels_[last][0];
+    const int l0 = static_cast<int>(lod);
+    const float t = lod - l0;
+    const float a = Bilinear(l0, fu * sizes_[l0], fv * sizes_[l0]);
+    if (t < 0.02f) return a;
+    const float b = Bilinear(l0 + 1, fu * sizes_[l0 + 1], fv * sizes_[l0 + 1]);
+    return a + (b - a) * t;
+  }
   std::vector<std::vector<float>> levels_;
   std::vector<int> sizes_;
 };
