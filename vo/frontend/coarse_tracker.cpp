@@ -147,7 +147,7 @@ TrackingResult CoarseTracker::Track(const ImagePyramid& frame, const Eigen::Isom
   Require(reference_ != nullptr, "CoarseTracker::Track called without a reference");
   TrackingResult result;
   result.hypotheses_tried = 1;
-  Eigen::Isometry3d T = T_new_ref_guess;
+  Eigen::Isometry3d T = Orthonormalized(T_new_ref_guess);
   double a = a_guess, b = b_guess;
   const int levels = std::min(frame.num_levels(), static_cast<int>(level_points_.size()));
   int top = levels - 1;
@@ -181,7 +181,7 @@ TrackingResult CoarseTracker::Track(const ImagePyramid& frame, const Eigen::Isom
       if (!options_.estimate_affine) gl.tail<2>().setZero();
       const Vector8d delta = -Hl.ldlt().solve(gl);
       if (!delta.allFinite()) break;
-      Eigen::Isometry3d T_try = ExpSE3(delta.head<6>()) * T;
+      Eigen::Isometry3d T_try = Orthonormalized(ExpSE3(delta.head<6>()) * T);
       const double a_try = a + delta[6];
       const double b_try = b + delta[7];
       Matrix8d H_try;

@@ -51,6 +51,16 @@ struct TrackingResult {
   int hypotheses_tried = 0;
 };
 
+// Projects the linear part back onto SO(3). Chained products and transposed
+// inverses of Isometry3d accumulate rounding that the constant-velocity
+// prediction would otherwise amplify frame after frame.
+inline Eigen::Isometry3d Orthonormalized(const Eigen::Isometry3d& T) {
+  Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
+  out.linear() = Eigen::Quaterniond(T.linear()).normalized().toRotationMatrix();
+  out.translation() = T.translation();
+  return out;
+}
+
 // Points closer than this to the border of a level are not used.
 constexpr int kTrackerBorder = 2;
 

@@ -221,7 +221,7 @@ bool MonoInitializer::AddFrame(const ImagePyramid& frame) {
         const double g = bp[i] + reg * (idepths[i] - means[i]);
         id_try[i] = std::max(1e-3, idepths[i] - (g + Hfp[i].dot(df)) / hpp_damped[i]);
       }
-      Eigen::Isometry3d T_try = ExpSE3(df.head<6>()) * T;
+      Eigen::Isometry3d T_try = Orthonormalized(ExpSE3(df.head<6>()) * T);
       const double a_try = a + df[6], b_try = b + df[7];
       // Gauge: mean inverse depth 1 (rescaling depths and translation together
       // leaves the photometric energy unchanged).
@@ -250,7 +250,7 @@ bool MonoInitializer::AddFrame(const ImagePyramid& frame) {
     last_num = std::max(num, 1);
   }
   for (int i = 0; i < n; ++i) points_[i].idepth = idepths[i];
-  velocity_ = T * T_prev.inverse();
+  velocity_ = Orthonormalized(T * T_prev.inverse());
   T_ = T;
   a_ = a;
   b_ = b;

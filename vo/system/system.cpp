@@ -130,7 +130,7 @@ void System::TrackFrame(int frame_index, const ImagePyramidPtr& pyr, const cv::M
     return;
   }
   consecutive_lost_ = 0;
-  velocity_ = result.T_new_ref * T_last_ref_.inverse();
+  velocity_ = Orthonormalized(result.T_new_ref * T_last_ref_.inverse());
   T_last_ref_ = result.T_new_ref;
   last_a_ = result.affine_a;
   last_b_ = result.affine_b;
@@ -138,7 +138,7 @@ void System::TrackFrame(int frame_index, const ImagePyramidPtr& pyr, const cv::M
   last_rmse_ = result.rmse;
 
   const Keyframe* ref = window_->FindKeyframe(reference_id_);
-  const Eigen::Isometry3d T_new_cw = result.T_new_ref * ref->world_to_camera;
+  const Eigen::Isometry3d T_new_cw = Orthonormalized(result.T_new_ref * ref->world_to_camera);
   // Absolute affine parameters (window convention I_j - b_j = e^{a_j - a_i} (I_i - b_i))
   // from the tracker's relative transfer I_new = e^{a} I_ref + b.
   const double a_new = ref->a + result.affine_a;
