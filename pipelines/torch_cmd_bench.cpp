@@ -1,14 +1,61 @@
-// PLACEHOLDER until the owning issue lands: registers `dvso bench` so the CLI
-// lists it, and fails loudly when run.
+// `dvso bench --model model.pt [--device cpu|cuda] [--height 256 --width 512]
+// [--batch 1] [--dtype fp32|fp16|bf16|all] [--json]`: inference latency.
+#include <iomanip>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <torch/cuda.h>
+
 #include "core/error.h"
 #include "pipelines/commands.h"
+#include "stacknet/latency.h"
 
 namespace dvso::cli {
 
 void AddBenchCommand(CLI::App& app) {
-  auto* cmd = app.add_subcommand("bench", "Inference latency of a TorchScript model (not implemented yet)");
-  cmd->allow_extras();
-  cmd->callback([] { throw Error("'dvso bench' is not implemented yet"); });
+  struct Args {
+    std::string model;
+    std::string dtype = "all";
+    stacknet::LatencyOptions options;
+    bool json = false;
+  };
+  auto args = std::make_shared<Args>();
+  auto* cmd = app.add_subcommand("bench", "Inference latency of a TorchScript model (median / p90)");
+  cmd->add_option("--model", args->model, "TorchScript model from `dvso export`")->required()->check(CLI::ExistingFile);
+  cmd->add_option("--device", args->options.device, "auto, cpu or cuda");
+  cmd->add_option("--height", args->options.height, "Input height");
+  cmd->add_option("--width", args->options.width, "Input width");
+  cmd->add_option("--batch", args->options.batch, "Batch size");
+  cmd->add_option("--dtype", args->dtype, "fp32, fp16, bf16 or all (= fp32, plus fp16 and bf16 on CUDA)");
+  cmd->add_option("--warmup", args->options.warmup, "Untimed warm-up runs");
+  cmd->add_option("--runs", args->options.runs, "Timed runs (at most)");
+  cmd->add_option("--max-seconds", args->options.max_seconds, "Time budget for the timed runs per dtype");
+  cmd->add_option("--threads", args->options.num_threads, "CPU threads (0 = hardware cores)");
+  cmd->add_flag("--json", args->json, "Print one JSON object");
+  cmd->callback([args] {
+    std::vector<std::string> dtypes{args->dtype};
+    if (args->dtype == "all") {
+      dtypes = {"fp32"};
+      const bool cuda = args->options.device == "cuda" || (args->options.device == "auto" && torch::cuda::is_available());
+      if (cuda) dtypes = {"fp32", "fp16", "bf16"};
+    }
+    nlohmann::json results = nlohmann::json::array();
+    for (const auto& dtype : dtypes) {
+      stacknet::LatencyOptions options = args->options;
+      options.dtype = dtype;
+      const stacknet::LatencyStats s = stacknet::MeasureLatency(args->model, options);
+      results.push_back({{"model", args->model}, {"device", s.device}, {"dtype", s.dtype}, {"batch", s.batch},
+                         {"height", s.height}, {"width", s.width}, {"threads", s.threads}, {"runs", s.runs},
+                         {"median_ms", s.median_ms}, {"p90_ms", s.p90_ms}, {"mean_ms", s.mean_ms},
+                         {"min_ms", s.min_ms}, {"max_ms", s.max_ms}});
+      if (!args->json) {
+        std::cout << std::fixed << std::setprecision(2) << s.device << " " << s.dtype << " batch " << s.batch << " "
+                  << s.width << "x" << s.height << (s.device == "cpu" ? " threads " + std::to_string(s.threads) : "")
+                  << ": median " << s.median_ms << " ms, p90 " << s.p90_ms << " ms (" << s.runs << " runs, min "
+                  << s.min_ms << ", max " << s.max_ms << ")" << std::endl;
+      }
+    }
+    if (args->json) std::cout << (results.size() == 1 ? results[0] : nlohmann::json{{"results", results}}).dump(2) << std::endl;
+  });
 }
 
 }  // namespace dvso::cli

@@ -1,14 +1,43 @@
-// PLACEHOLDER until the owning issue lands: registers `dvso export` so the CLI
-// lists it, and fails loudly when run.
+// `dvso export --checkpoint CKPT --out model.pt [--model auto|simple|stack]`:
+// traces a trained network to TorchScript (input 1x3xHxW in [0, 1]; output
+// left and right disparity at scale 0 in pixels of the input).
+// `dvso export --config FILE --random-init --model stack --out model.pt`
+// exports an untrained network of that architecture (for `dvso bench`).
+#include <iostream>
+
 #include "core/error.h"
 #include "pipelines/commands.h"
+#include "stacknet/config.h"
+#include "stacknet/export.h"
 
 namespace dvso::cli {
 
 void AddExportCommand(CLI::App& app) {
-  auto* cmd = app.add_subcommand("export", "Export a checkpoint to TorchScript (not implemented yet)");
-  cmd->allow_extras();
-  cmd->callback([] { throw Error("'dvso export' is not implemented yet"); });
+  struct Args {
+    std::string checkpoint, config, out;
+    bool random_init = false;
+    stacknet::ExportOptions options;
+  };
+  auto args = std::make_shared<Args>();
+  auto* cmd = app.add_subcommand("export", "Export a training checkpoint to TorchScript");
+  cmd->add_option("--checkpoint", args->checkpoint, "Checkpoint written by `dvso train`")->check(CLI::ExistingFile);
+  cmd->add_option("--config", args->config, "With --random-init: architecture from this YAML config")
+      ->check(CLI::ExistingFile);
+  cmd->add_flag("--random-init", args->random_init, "Export untrained weights (latency benchmarks)");
+  cmd->add_option("--out", args->out, "Output TorchScript file (.pt)")->required();
+  cmd->add_option("--model", args->options.model,
+                  "auto (as trained), simple (SimpleNet only) or stack (SimpleNet + ResidualNet)");
+  cmd->callback([args] {
+    if (args->random_init) {
+      Require(!args->config.empty() && args->checkpoint.empty(), "--random-init needs --config (and no --checkpoint)");
+      const stacknet::StackNetConfig config = stacknet::LoadConfig(args->config, /*check=*/false);
+      const std::string model = args->options.model == "auto" ? "stack" : args->options.model;
+      std::cout << "Exported untrained " << stacknet::ExportRandomInit(config.network, model, args->out) << std::endl;
+      return;
+    }
+    Require(!args->checkpoint.empty(), "give --checkpoint CKPT (or --config FILE --random-init)");
+    std::cout << "Exported " << stacknet::ExportCheckpoint(args->checkpoint, args->out, args->options) << std::endl;
+  });
 }
 
 }  // namespace dvso::cli

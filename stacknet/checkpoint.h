@@ -1,0 +1,39 @@
+// Training checkpoints: model weights + Adam state + position in the schedule
+// + the full config, in one torch::serialize archive written atomically.
+#pragma once
+
+#include <torch/torch.h>
+
+#include <string>
+
+#include "stacknet/networks.h"
+#include "stacknet/options.h"
+
+namespace dvso::stacknet {
+
+// Where training stands; the next batch to run is (stage, epoch, batch).
+struct TrainingPosition {
+  int stage = 0;
+  int epoch = 0;
+  int batch = 0;
+  int64_t global_step = 0;
+};
+
+struct CheckpointInfo {
+  std::string config_yaml;            // ConfigToYaml() of the run
+  TrainingPosition position;
+  std::string trained_model = "simple";  // "simple" or "stack": which network export should use
+};
+
+void SaveCheckpoint(const std::string& path, StackNet& model, torch::optim::Adam* optimizer,
+                    const CheckpointInfo& info);
+// Reads config and position only (to build the model before loading weights).
+CheckpointInfo ReadCheckpointInfo(const std::string& path);
+// Loads weights (and the optimiser state when `optimizer` is given and the
+// checkpoint has one for the same stage). Throws dvso::Error naming the file.
+void LoadCheckpointWeights(const std::string& path, StackNet& model, torch::optim::Adam* optimizer = nullptr);
+
+// Builds the StackNet of a checkpoint with its weights (CPU, eval use).
+StackNet LoadModelFromCheckpoint(const std::string& path, CheckpointInfo* info = nullptr);
+
+}  // namespace dvso::stacknet

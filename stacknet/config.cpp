@@ -1,0 +1,238 @@
+#include "stacknet/config.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include "core/error.h"
+
+namespace dvso::stacknet {
+namespace {
+
+// Reads the fields of one YAML map; Finish() rejects keys nobody asked for.
+class StrictMap {
+ public:
+  StrictMap(const YAML::Node& node, std::string where) : node_(node), where_(std::move(where)) {
+    Require(!node_ || node_.IsNull() || node_.IsMap(), where_ + " must be a map");
+  }
+  template <typename T>
+  void Get(const std::string& key, T* value) {
+    seen_.insert(key);
+    if (!node_ || node_.IsNull() || !node_[key]) return;
+    try {
+      *value = node_[key].as<T>();
+    } catch (const YAML::Exception& e) {
+      throw Error(where_ + "." + key + ": bad value (" + e.msg + ")");
+    }
+  }
+  YAML::Node Child(const std::string& key) {
+    seen_.insert(key);
+    if (!node_ || node_.IsNull()) return YAML::Node();
+    return node_[key];
+  }
+  void Finish() const {
+    if (!node_ || node_.IsNull()) return;
+    for (const auto& item : node_) {
+      const std::string key = item.first.as<std::string>();
+      Require(seen_.count(key) > 0, "unknown config key '" + where_ + "." + key + "'");
+    }
+  }
+
+ private:
+  YAML::Node node_;
+  std::string where_;
+  std::set<std::string> seen_;
+};
+
+template <typename Options, typename Visit>
+void ReadSection(const YAML::Node& node, const std::string& where, Options* options, Visit visit) {
+  StrictMap map(node, where);
+  visit(map, *options);
+  map.Finish();
+}
+
+// One visitor per struct, used for both reading and writing (same key list).
+template <typename Map>
+void VisitNetwork(Map& m, NetworkOptions& o) {
+  m.Get("encoder_depth", &o.encoder_depth);
+  m.Get("width_multiplier", &o.width_multiplier);
+  m.Get("input_height", &o.input_height);
+  m.Get("input_width", &o.input_width);
+  m.Get("max_disparity", &o.max_disparity);
+  m.Get("residual_leaky_slope", &o.residual_leaky_slope);
+  m.Get("residual_blocks", &o.residual_blocks);
+}
+template <typename Map>
+void VisitLoss(Map& m, LossOptions& o) {
+  m.Get("alpha_u", &o.alpha_u);
+  m.Get("alpha_s", &o.alpha_s);
+  m.Get("alpha_lr", &o.alpha_lr);
+  m.Get("alpha_smooth", &o.alpha_smooth);
+  m.Get("alpha_occ", &o.alpha_occ);
+  m.Get("ssim_alpha", &o.ssim_alpha);
+  m.Get("berhu_fraction", &o.berhu_fraction);
+  m.Get("num_scales", &o.num_scales);
+}
+template <typename Map>
+void VisitData(Map& m, DataOptions& o) {
+  m.Get("sequences", &o.sequences);
+  m.Get("split_file", &o.split_file);
+  m.Get("label_dir_left", &o.label_dir_left);
+  m.Get("label_dir_right", &o.label_dir_right);
+  m.Get("gt_disparity_left", &o.gt_disparity_left);
+  m.Get("gt_disparity_right", &o.gt_disparity_right);
+  m.Get("gt_sample_fraction", &o.gt_sample_fraction);
+  m.Get("frame_step", &o.frame_step);
+  m.Get("use_color", &o.use_color);
+}
+template <typename Map>
+void VisitAugment(Map& m, AugmentOptions& o) {
+  m.Get("enabled", &o.enabled);
+  m.Get("probability", &o.probability);
+  m.Get("gamma_min", &o.gamma_min);
+  m.Get("gamma_max", &o.gamma_max);
+  m.Get("brightness_min", &o.brightness_min);
+  m.Get("brightness_max", &o.brightness_max);
+  m.Get("color_min", &o.color_min);
+  m.Get("color_max", &o.color_max);
+  m.Get("flip_probability", &o.flip_probability);
+}
+template <typename Map>
+void VisitTrain(Map& m, TrainOptions& o) {
+  m.Get("output_dir", &o.output_dir);
+  m.Get("batch_size", &o.batch_size);
+  m.Get("num_workers", &o.num_workers);
+  m.Get("seed", &o.seed);
+  m.Get("adam_beta1", &o.adam_beta1);
+  m.Get("adam_beta2", &o.adam_beta2);
+  m.Get("adam_epsilon", &o.adam_epsilon);
+  m.Get("device", &o.device);
+  m.Get("num_threads", &o.num_threads);
+  m.Get("progress", &o.progress);
+}
+template <typename Map>
+void VisitStage(Map& m, StageOptions& o) {
+  m.Get("name", &o.name);
+  m.Get("model", &o.model);
+  m.Get("epochs", &o.epochs);
+  m.Get("learning_rate", &o.learning_rate);
+  m.Get("lr_halving_start", &o.lr_halving_start);
+  m.Get("lr_halving_every", &o.lr_halving_every);
+  m.Get("use_unsupervised", &o.use_unsupervised);
+  m.Get("use_supervised", &o.use_supervised);
+  m.Get("use_lr", &o.use_lr);
+  m.Get("use_smooth", &o.use_smooth);
+  m.Get("use_occ", &o.use_occ);
+  m.Get("data", &o.data);
+  m.Get("max_steps_per_epoch", &o.max_steps_per_epoch);
+}
+
+// Writer with the same Get() interface as StrictMap.
+class YamlWriter {
+ public:
+  explicit YamlWriter(YAML::Emitter& out) : out_(out) {}
+  template <typename T>
+  void Get(const std::string& key, T* value) {
+    out_ << YAML::Key << key << YAML::Value << *value;
+  }
+
+ private:
+  YAML::Emitter& out_;
+};
+
+template <typename Options, typename Visit>
+void WriteSection(YAML::Emitter& out, const std::string& key, Options options, Visit visit) {
+  out << YAML::Key << key << YAML::Value << YAML::BeginMap;
+  YamlWriter writer(out);
+  visit(writer, options);
+  out << YAML::EndMap;
+}
+
+StackNetConfig ParseNode(const YAML::Node& root, const std::string& origin) {
+  StackNetConfig config;
+  StrictMap top(root, "config");
+  ReadSection(top.Child("network"), "network", &config.network, VisitNetwork<StrictMap>);
+  ReadSection(top.Child("loss"), "loss", &config.loss, VisitLoss<StrictMap>);
+  ReadSection(top.Child("data"), "data", &config.data, VisitData<StrictMap>);
+  ReadSection(top.Child("augment"), "augment", &config.augment, VisitAugment<StrictMap>);
+  ReadSection(top.Child("train"), "train", &config.train, VisitTrain<StrictMap>);
+  const YAML::Node datasets = top.Child("datasets");
+  if (datasets && !datasets.IsNull()) {
+    Require(datasets.IsMap(), "config.datasets must be a map of name -> data options");
+    for (const auto& item : datasets) {
+      const std::string name = item.first.as<std::string>();
+      DataOptions options = config.data;  // named datasets inherit the default data options
+      options.sequences.clear();
+      options.split_file.clear();
+      ReadSection(item.second, "datasets." + name, &options, VisitData<StrictMap>);
+      config.datasets.emplace_back(name, options);
+    }
+  }
+  const YAML::Node stages = top.Child("stages");
+  if (stages && !stages.IsNull()) {
+    Require(stages.IsSequence(), "config.stages must be a list");
+    for (size_t i = 0; i < stages.size(); ++i) {
+      StageOptions stage;
+      stage.name = "stage" + std::to_string(i);
+      ReadSection(stages[i], "stages[" + std::to_string(i) + "]", &stage, VisitStage<StrictMap>);
+      config.stages.push_back(stage);
+    }
+  }
+  top.Finish();
+  return config;
+}
+
+}  // namespace
+
+StackNetConfig ParseConfig(const std::string& yaml_text, const std::string& origin, bool check) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(yaml_text);
+  } catch (const YAML::Exception& e) {
+    throw Error(origin, std::string("YAML parse error: ") + e.what());
+  }
+  try {
+    StackNetConfig config = ParseNode(root, origin);
+    if (check) config.Check();
+    return config;
+  } catch (const Error& e) {
+    if (!e.path().empty()) throw;
+    throw Error(origin, e.what());
+  }
+}
+
+StackNetConfig LoadConfig(const std::string& path, bool check) {
+  std::ifstream file(path);
+  RequireFile(file.good(), path, "cannot open config file");
+  std::stringstream text;
+  text << file.rdbuf();
+  return ParseConfig(text.str(), path, check);
+}
+
+std::string ConfigToYaml(const StackNetConfig& config) {
+  YAML::Emitter out;
+  out << YAML::BeginMap;
+  WriteSection(out, "network", config.network, VisitNetwork<YamlWriter>);
+  WriteSection(out, "loss", config.loss, VisitLoss<YamlWriter>);
+  WriteSection(out, "data", config.data, VisitData<YamlWriter>);
+  WriteSection(out, "augment", config.augment, VisitAugment<YamlWriter>);
+  WriteSection(out, "train", config.train, VisitTrain<YamlWriter>);
+  if (!config.datasets.empty()) {
+    out << YAML::Key << "datasets" << YAML::Value << YAML::BeginMap;
+    for (const auto& [name, options] : config.datasets) WriteSection(out, name, options, VisitData<YamlWriter>);
+    out << YAML::EndMap;
+  }
+  out << YAML::Key << "stages" << YAML::Value << YAML::BeginSeq;
+  for (StageOptions stage : config.stages) {
+    out << YAML::BeginMap;
+    YamlWriter writer(out);
+    VisitStage(writer, stage);
+    out << YAML::EndMap;
+  }
+  out << YAML::EndSeq << YAML::EndMap;
+  return std::string(out.c_str()) + "\n";
+}
+
+}  // namespace dvso::stacknet

@@ -1,0 +1,20 @@
+// YAML <-> StackNetConfig. Strict: an unknown key anywhere is an error naming
+// the key and the file, so a typo never silently falls back to a default.
+#pragma once
+
+#include <string>
+
+#include "stacknet/options.h"
+
+namespace dvso::stacknet {
+
+// Loads a config file and (unless check = false, for callers that override
+// fields first and call Check() themselves) checks it; throws dvso::Error naming the file.
+StackNetConfig LoadConfig(const std::string& path, bool check = true);
+// Same from YAML text (`origin` names the source in errors).
+StackNetConfig ParseConfig(const std::string& yaml_text, const std::string& origin = "<config>", bool check = true);
+// The full config (all fields, defaults included) as YAML; printed at start
+// and stored in checkpoints so that export/predict rebuild the same network.
+std::string ConfigToYaml(const StackNetConfig& config);
+
+}  // namespace dvso::stacknet

@@ -1,0 +1,226 @@
+#include "stacknet/dataset.h"
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <sstream>
+
+#include "core/disparity_io.h"
+#include "core/error.h"
+#include "core/fs_util.h"
+
+namespace dvso::stacknet {
+namespace fs = std::filesystem;
+namespace {
+
+// cv::Mat (grey or BGR, 8 bit) -> 3 x H x W RGB float tensor in [0, 1] at width x height.
+torch::Tensor ImageToTensor(const cv::Mat& image, int width, int height) {
+  cv::Mat rgb;
+  if (image.channels() == 1) {
+    cv::cvtColor(image, rgb, cv::COLOR_GRAY2RGB);
+  } else {
+    cv::cvtColor(image, rgb, cv::COLOR_BGR2RGB);
+  }
+  if (rgb.cols != width || rgb.rows != height) {
+    cv::Mat resized;
+    cv::resize(rgb, resized, cv::Size(width, height), 0, 0, cv::INTER_AREA);
+    rgb = resized;
+  }
+  cv::Mat as_float;
+  rgb.convertTo(as_float, CV_32FC3, 1.0 / 255.0);
+  return torch::from_blob(as_float.data, {height, width, 3}, torch::kFloat32).permute({2, 0, 1}).clone();
+}
+
+// Sparse map in pixels of the network width -> (label as width fraction, mask).
+void LabelToTensors(const cv::Mat& label, int width, int height, torch::Tensor* value, torch::Tensor* mask) {
+  if (label.empty()) {
+    *value = torch::zeros({1, height, width});
+    *mask = torch::zeros({1, height, width});
+    return;
+  }
+  cv::Mat contiguous = label.clone();
+  const torch::Tensor pixels = torch::from_blob(contiguous.data, {1, height, width}, torch::kFloat32).clone();
+  *mask = (pixels > 0).to(torch::kFloat32);
+  *value = pixels / static_cast<double>(width);
+}
+
+std::vector<std::string> SortedImages(const std::string& dir) {
+  std::vector<std::string> files;
+  for (const auto& entry : fs::directory_iterator(dir)) {
+    const std::string ext = entry.path().extension().string();
+    if (entry.is_regular_file() && (ext == ".png" || ext == ".jpg" || ext == ".jpeg")) {
+      files.push_back(entry.path().string());
+    }
+  }
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
+}  // namespace
+
+cv::Mat ResizeSparseDisparity(const cv::Mat& sparse, int width, int height) {
+  Require(sparse.type() == CV_32F, "ResizeSparseDisparity expects CV_32F");
+  if (sparse.cols == width && sparse.rows == height) return sparse.clone();
+  cv::Mat out = cv::Mat::zeros(height, width, CV_32F);
+  const double sx = static_cast<double>(width) / sparse.cols;
+  const double sy = static_cast<double>(height) / sparse.rows;
+  for (int y = 0; y < sparse.rows; ++y) {
+    const float* row = sparse.ptr<float>(y);
+    for (int x = 0; x < sparse.cols; ++x) {
+      if (!(row[x] > 0)) continue;
+      // Pixel centres map as (x + 0.5) * s - 0.5; the nearest target pixel gets the label.
+      const int tx = std::clamp(static_cast<int>(std::floor((x + 0.5) * sx)), 0, width - 1);
+      const int ty = std::clamp(static_cast<int>(std::floor((y + 0.5) * sy)), 0, height - 1);
+      out.at<float>(ty, tx) = static_cast<float>(row[x] * sx);
+    }
+  }
+  return out;
+}
+
+cv::Mat SampleSparse(const cv::Mat& dense, double fraction, uint64_t seed) {
+  cv::Mat out = cv::Mat::zeros(dense.size(), CV_32F);
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  for (int y = 0; y < dense.rows; ++y) {
+    for (int x = 0; x < dense.cols; ++x) {
+      const float v = dense.at<float>(y, x);
+      if (v > 0 && uniform(rng) < fraction) out.at<float>(y, x) = v;
+    }
+  }
+  return out;
+}
+
+StereoDataset::StereoDataset(const DataOptions& options, int network_width, int network_height)
+    : options_(options), width_(network_width), height_(network_height) {
+  options_.Check();
+  if (!options_.split_file.empty()) {
+    std::ifstream split(options_.split_file);
+    RequireFile(split.good(), options_.split_file, "cannot open split file");
+    const fs::path base = fs::path(options_.split_file).parent_path();
+    std::string line;
+    int line_number = 0;
+    while (std::getline(split, line)) {
+      ++line_number;
+      if (line.empty() || line[0] == '#') continue;
+      std::istringstream fields(line);
+      std::string root;
+      int frame = -1;
+      RequireFile(static_cast<bool>(fields >> root >> frame) && frame >= 0, options_.split_file,
+                  "line " + std::to_string(line_number) + ": expected '<sequence> <frame>'");
+      if (fs::path(root).is_relative() && !fs::exists(root)) root = (base / root).string();
+      int seq = -1;
+      for (size_t i = 0; i < sequences_.size(); ++i) {
+        if (sequences_[i].root == root) seq = static_cast<int>(i);
+      }
+      if (seq < 0) {
+        AddSequence(root);
+        seq = static_cast<int>(sequences_.size()) - 1;
+      }
+      items_.push_back({seq, frame});
+    }
+  } else {
+    for (const auto& root : options_.sequences) {
+      AddSequence(root);
+      const Sequence& s = sequences_.back();
+      const int frames = s.reader ? s.reader->size() : static_cast<int>(s.raw_left.size());
+      for (int f = 0; f < frames; f += options_.frame_step) {
+        items_.push_back({static_cast<int>(sequences_.size()) - 1, f});
+      }
+    }
+  }
+  Require(!items_.empty(), "dataset: no training frames found");
+}
+
+void StereoDataset::AddSequence(const std::string& root) {
+  Sequence seq;
+  seq.root = root;
+  RequireFile(fs::is_directory(root), root, "sequence folder not found");
+  if (fs::is_directory(JoinPath(root, "image_02/data")) && fs::is_directory(JoinPath(root, "image_03/data"))) {
+    seq.raw_left = SortedImages(JoinPath(root, "image_02/data"));
+    seq.raw_right = SortedImages(JoinPath(root, "image_03/data"));
+    RequireFile(seq.raw_left.size() == seq.raw_right.size() && !seq.raw_left.empty(), root,
+                "KITTI raw drive: image_02 and image_03 must hold the same non-zero number of images");
+  } else {
+    seq.reader = OpenSequence(root);
+    RequireFile(seq.reader->is_stereo(), root, "training needs a stereo sequence");
+  }
+  auto dir_if_exists = [&](const std::string& name) {
+    if (name.empty()) return std::string();
+    const std::string dir = fs::path(name).is_absolute() ? name : JoinPath(root, name);
+    return fs::is_directory(dir) ? dir : std::string();
+  };
+  seq.left_labels = dir_if_exists(options_.label_dir_left);
+  seq.right_labels = dir_if_exists(options_.label_dir_right);
+  if (seq.left_labels.empty() && seq.right_labels.empty()) {
+    // Until Stereo DSO labels exist for this sequence: sparse samples of the simulator's GT.
+    seq.left_labels = dir_if_exists(options_.gt_disparity_left);
+    seq.right_labels = dir_if_exists(options_.gt_disparity_right);
+    seq.labels_are_dense_gt = !seq.left_labels.empty() || !seq.right_labels.empty();
+  }
+  sequences_.push_back(std::move(seq));
+}
+
+void StereoDataset::ReadImages(const Sequence& seq, int frame, cv::Mat* left, cv::Mat* right) const {
+  if (seq.reader) {
+    RequireFile(frame < seq.reader->size(), seq.root, "frame " + std::to_string(frame) + " out of range");
+    SequenceReadOptions read;
+    read.load_color = options_.use_color && seq.reader->has_color();
+    const StereoFrame f = seq.reader->Read(frame, read);
+    const bool color = !f.left_color.empty() && !f.right_color.empty();
+    *left = color ? f.left_color : f.left;
+    *right = color ? f.right_color : f.right;
+    return;
+  }
+  RequireFile(frame < static_cast<int>(seq.raw_left.size()), seq.root, "frame out of range");
+  const int mode = options_.use_color ? cv::IMREAD_COLOR : cv::IMREAD_GRAYSCALE;
+  *left = cv::imread(seq.raw_left[frame], mode);
+  *right = cv::imread(seq.raw_right[frame], mode);
+  RequireFile(!left->empty(), seq.raw_left[frame], "cannot read image");
+  RequireFile(!right->empty(), seq.raw_right[frame], "cannot read image");
+}
+
+cv::Mat StereoDataset::ReadLabel(const Sequence& seq, const std::string& dir, int frame, int side) const {
+  if (dir.empty()) return cv::Mat();
+  const std::string path = JoinPath(dir, FrameFileName(frame, ".png"));
+  if (!fs::exists(path)) return cv::Mat();  // frames without labels train self-supervised only
+  cv::Mat label = ReadKittiMapPng(path);
+  if (seq.labels_are_dense_gt) {
+    // Fixed per frame (not per epoch), like a label file would be.
+    const uint64_t seed = std::hash<std::string>{}(seq.root) ^ (static_cast<uint64_t>(frame) * 2654435761ULL + side);
+    label = SampleSparse(label, options_.gt_sample_fraction, seed);
+  }
+  return ResizeSparseDisparity(label, width_, height_);
+}
+
+StereoSample StereoDataset::Load(int index) const {
+  Require(index >= 0 && index < size(), "dataset index out of range");
+  const Item& item = items_[index];
+  const Sequence& seq = sequences_[item.sequence];
+  cv::Mat left, right;
+  ReadImages(seq, item.frame, &left, &right);
+  StereoSample s;
+  s.left = ImageToTensor(left, width_, height_);
+  s.right = ImageToTensor(right, width_, height_);
+  LabelToTensors(ReadLabel(seq, seq.left_labels, item.frame, 0), width_, height_, &s.left_label, &s.left_mask);
+  LabelToTensors(ReadLabel(seq, seq.right_labels, item.frame, 1), width_, height_, &s.right_label, &s.right_mask);
+  return s;
+}
+
+std::string StereoDataset::Describe() const {
+  std::ostringstream out;
+  out << items_.size() << " stereo pairs from " << sequences_.size() << " sequence(s), network input " << width_
+      << "x" << height_ << "\n";
+  for (const auto& s : sequences_) {
+    out << "  " << s.root << ": labels "
+        << (s.left_labels.empty() && s.right_labels.empty()
+                ? std::string("none (self-supervised only)")
+                : (s.labels_are_dense_gt ? "sampled from GT " : "") + s.left_labels +
+                      (s.right_labels.empty() ? "" : " | " + s.right_labels))
+        << "\n";
+  }
+  return out.str();
+}
+
+}  // namespace dvso::stacknet

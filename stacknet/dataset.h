@@ -1,0 +1,68 @@
+// Stereo training samples: pairs from the core sequence readers (KITTI
+// odometry layout, `dvso simulate` output, KITTI raw drives with image_02/
+// image_03), sparse disparity labels, resizing to the network size.
+#pragma once
+
+#include <torch/torch.h>
+
+#include <memory>
+#include <opencv2/core.hpp>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "core/sequence.h"
+#include "stacknet/options.h"
+
+namespace dvso::stacknet {
+
+// One sample at network resolution, before batching.
+struct StereoSample {
+  torch::Tensor left, right;              // 3 x H x W, RGB in [0, 1]
+  torch::Tensor left_label, right_label;  // 1 x H x W, fraction of the width
+  torch::Tensor left_mask, right_mask;    // 1 x H x W, 1 = labelled
+};
+
+// Resizes a sparse disparity map (pixels, 0 = none) to width x height without
+// smearing: every labelled pixel moves to its scaled position and its value
+// scales with the width (nearest, no interpolation between labels).
+cv::Mat ResizeSparseDisparity(const cv::Mat& sparse, int width, int height);
+
+// Keeps a random `fraction` of the valid pixels of a dense map (simulator GT)
+// as sparse labels; deterministic for a given seed.
+cv::Mat SampleSparse(const cv::Mat& dense, double fraction, uint64_t seed);
+
+// A KITTI raw drive (image_02/data, image_03/data) opened as stereo pairs; the
+// core readers cover the odometry layout and the simulator.
+class StereoDataset {
+ public:
+  StereoDataset(const DataOptions& options, int network_width, int network_height);
+  int size() const { return static_cast<int>(items_.size()); }
+  // Loads sample i (no augmentation). Throws dvso::Error naming the file.
+  StereoSample Load(int index) const;
+  // Human-readable summary (sequences, frames, label source per sequence).
+  std::string Describe() const;
+
+ private:
+  struct Sequence {
+    std::string root;
+    std::unique_ptr<SequenceReader> reader;           // core reader (odometry layout / simulator)
+    std::vector<std::string> raw_left, raw_right;     // KITTI raw drive images when reader is null
+    std::string left_labels, right_labels;            // label folders ("" = none)
+    bool labels_are_dense_gt = false;                 // sample them sparsely (simulator fallback)
+  };
+  struct Item {
+    int sequence;
+    int frame;
+  };
+  void AddSequence(const std::string& root);
+  void ReadImages(const Sequence& seq, int frame, cv::Mat* left, cv::Mat* right) const;
+  cv::Mat ReadLabel(const Sequence& seq, const std::string& dir, int frame, int side) const;
+
+  DataOptions options_;
+  int width_, height_;
+  std::vector<Sequence> sequences_;
+  std::vector<Item> items_;
+};
+
+}  // namespace dvso::stacknet

@@ -1,0 +1,89 @@
+#include "stacknet/export.h"
+
+#include <torch/csrc/jit/frontend/tracer.h>
+
+#include <algorithm>
+#include <sstream>
+
+#include "core/error.h"
+#include "core/fs_util.h"
+#include "stacknet/checkpoint.h"
+#include "stacknet/config.h"
+#include "stacknet/warping.h"
+
+namespace dvso::stacknet {
+
+void ExportOptions::Check() const {
+  Require(model == "auto" || model == "simple" || model == "stack", "export model must be auto, simple or stack");
+}
+
+std::pair<torch::Tensor, torch::Tensor> InferPixels(StackNet& model, bool use_residual, const torch::Tensor& image) {
+  const DisparityPyramid d =
+      use_residual ? model->forward(image).refined : model->simple_net()->forward(image);
+  // Fractions of the width -> pixels; the width is taken from the tensor (shape-free trace).
+  const torch::Tensor width = WidthAsTensor(d.left[0]);
+  return {d.left[0] * width, d.right[0] * width};
+}
+
+torch::jit::Module TraceStackNet(StackNet& model, bool use_residual, int input_height, int input_width) {
+  model->eval();
+  model->to(torch::kCPU);
+  torch::jit::Module mirror(use_residual ? "DvsoStackNet" : "DvsoSimpleNet");
+  for (const auto& item : model->named_parameters()) {
+    std::string name = item.key();
+    std::replace(name.begin(), name.end(), '.', '_');
+    // Same tensor object: the tracer maps it to `self.<name>` instead of a constant.
+    mirror.register_parameter(name, item.value(), /*is_buffer=*/false);
+  }
+  mirror.register_attribute("input_height", c10::IntType::get(), c10::IValue(static_cast<int64_t>(input_height)));
+  mirror.register_attribute("input_width", c10::IntType::get(), c10::IValue(static_cast<int64_t>(input_width)));
+  mirror.register_attribute("uses_residual", c10::BoolType::get(), c10::IValue(use_residual));
+
+  const torch::Tensor example = torch::rand({1, 3, input_height, input_width});
+  auto traced_fn = [&](torch::jit::Stack inputs) -> torch::jit::Stack {
+    const auto [left, right] = InferPixels(model, use_residual, inputs.at(0).toTensor());
+    return {c10::ivalue::Tuple::create({left, right})};
+  };
+  torch::NoGradGuard no_grad;
+  auto traced = torch::jit::tracer::trace({c10::IValue(example)}, traced_fn,
+                                          [](const torch::autograd::Variable&) { return std::string(); },
+                                          /*strict=*/false, /*force_outplace=*/false, &mirror);
+  std::shared_ptr<torch::jit::Graph> graph = traced.first->graph;
+  const c10::QualifiedName method_name(*mirror.type()->name(), "forward");
+  torch::jit::Function* forward = mirror._ivalue()->compilation_unit()->create_function(method_name, graph);
+  mirror.type()->addMethod(forward);
+  return mirror;
+}
+
+namespace {
+std::string SaveTraced(StackNet& model, bool use_residual, const NetworkOptions& network, const std::string& out_path) {
+  torch::jit::Module module = TraceStackNet(model, use_residual, network.input_height, network.input_width);
+  WriteAtomically(out_path, [&](const std::string& temp) { module.save(temp); });
+  int64_t parameters = 0;
+  for (const auto& p : use_residual ? model->parameters() : model->simple_net()->parameters()) parameters += p.numel();
+  std::ostringstream description;
+  description << (use_residual ? "StackNet" : "SimpleNet") << " (ResNet-" << network.encoder_depth << ", width x"
+              << network.width_multiplier << ", " << network.input_width << "x" << network.input_height << ", "
+              << parameters << " parameters) -> " << out_path;
+  return description.str();
+}
+}  // namespace
+
+std::string ExportRandomInit(const NetworkOptions& network, const std::string& model, const std::string& out_path) {
+  network.Check();
+  Require(model == "simple" || model == "stack", "random-init export: model must be simple or stack");
+  StackNet net(network);
+  return SaveTraced(net, model == "stack", network, out_path);
+}
+
+std::string ExportCheckpoint(const std::string& checkpoint_path, const std::string& out_path,
+                             const ExportOptions& options) {
+  options.Check();
+  CheckpointInfo info;
+  StackNet model = LoadModelFromCheckpoint(checkpoint_path, &info);
+  const StackNetConfig config = ParseConfig(info.config_yaml, checkpoint_path + " (embedded config)");
+  const bool use_residual = options.model == "stack" || (options.model == "auto" && info.trained_model == "stack");
+  return SaveTraced(model, use_residual, config.network, out_path);
+}
+
+}  // namespace dvso::stacknet

@@ -1,0 +1,78 @@
+// TorchScript export: the traced module reproduces the C++ module (1e-5),
+// also at an input size other than the traced one, and loads from disk.
+#include <gtest/gtest.h>
+#include <torch/script.h>
+
+#include <filesystem>
+
+#include "stacknet/checkpoint.h"
+#include "stacknet/config.h"
+#include "stacknet/export.h"
+#include "stacknet_test_util.h"
+
+namespace dvso::stacknet {
+namespace {
+namespace fs = std::filesystem;
+
+double MaxDifference(const torch::Tensor& a, const torch::Tensor& b) { return (a - b).abs().max().item<double>(); }
+
+TEST(Export, TracedModuleMatchesTheCppModuleAtTwoSizes) {
+  torch::manual_seed(9);
+  StackNet net(testing::TinyNetwork());
+  {
+    // Make the residual path non-trivial (its heads start at zero).
+    torch::NoGradGuard no_grad;
+    for (auto& p : net->residual_net()->parameters()) p.add_(torch::randn_like(p) * 0.05);
+  }
+  net->eval();
+  const std::string path = (fs::temp_directory_path() / ("dvso_export_" + std::to_string(::getpid()) + ".pt")).string();
+  for (const bool use_residual : {false, true}) {
+    torch::jit::Module traced = TraceStackNet(net, use_residual, 32, 64);
+    traced.save(path);
+    torch::jit::Module loaded = torch::jit::load(path);
+    EXPECT_EQ(loaded.attr("input_width").toInt(), 64);
+    for (const auto& size : {std::pair<int, int>{32, 64}, std::pair<int, int>{64, 128}}) {
+      const torch::Tensor image = torch::rand({1, 3, size.first, size.second});
+      torch::NoGradGuard no_grad;
+      const auto [left, right] = InferPixels(net, use_residual, image);
+      const auto out = loaded.forward({image}).toTuple();
+      const torch::Tensor traced_left = out->elements()[0].toTensor();
+      const torch::Tensor traced_right = out->elements()[1].toTensor();
+      ASSERT_EQ(traced_left.sizes(), left.sizes());
+      EXPECT_LT(MaxDifference(traced_left, left), 1e-5) << "residual " << use_residual << " size " << size.second;
+      EXPECT_LT(MaxDifference(traced_right, right), 1e-5);
+      // Pixels of the input: bounded by max_disparity * width.
+      EXPECT_GT(left.max().item<double>(), 0.0);
+      if (!use_residual) EXPECT_LT(left.max().item<double>(), 0.3 * size.second);
+    }
+  }
+  fs::remove(path);
+}
+
+TEST(Export, CheckpointExportUsesTheTrainedNetwork) {
+  torch::manual_seed(4);
+  StackNetConfig config;
+  config.network = testing::TinyNetwork();
+  config.data.sequences = {"unused"};
+  config.stages.resize(1);
+  StackNet net(config.network);
+  const fs::path dir = fs::temp_directory_path() / ("dvso_export_ckpt_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  CheckpointInfo info;
+  info.config_yaml = ConfigToYaml(config);
+  info.trained_model = "simple";
+  SaveCheckpoint((dir / "c.pt").string(), net, nullptr, info);
+  const std::string description = ExportCheckpoint((dir / "c.pt").string(), (dir / "m.pt").string());
+  EXPECT_NE(description.find("SimpleNet"), std::string::npos) << description;
+  torch::jit::Module loaded = torch::jit::load((dir / "m.pt").string());
+  EXPECT_FALSE(loaded.attr("uses_residual").toBool());
+  const torch::Tensor image = torch::rand({1, 3, 32, 64});
+  net->eval();
+  torch::NoGradGuard no_grad;
+  const auto [left, right] = InferPixels(net, false, image);
+  EXPECT_LT(MaxDifference(loaded.forward({image}).toTuple()->elements()[0].toTensor(), left), 1e-5);
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace dvso::stacknet

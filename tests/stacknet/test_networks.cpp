@@ -1,0 +1,102 @@
+// Shapes of SimpleNet / ResidualNet / StackNet at every scale, ResidualNet's
+// input as defined in paper 3.1, and the stage-2 freezing of SimpleNet.
+#include <gtest/gtest.h>
+
+#include "stacknet/networks.h"
+#include "stacknet/trainer.h"
+#include "stacknet_test_util.h"
+
+namespace dvso::stacknet {
+namespace {
+
+void ExpectPyramidShapes(const DisparityPyramid& d, int64_t n, int64_t h, int64_t w) {
+  ASSERT_EQ(d.num_scales(), 4);
+  for (int s = 0; s < 4; ++s) {
+    EXPECT_EQ(d.left[s].sizes(), (std::vector<int64_t>{n, 1, h >> s, w >> s})) << "scale " << s;
+    EXPECT_EQ(d.right[s].sizes(), (std::vector<int64_t>{n, 1, h >> s, w >> s})) << "scale " << s;
+  }
+}
+
+class EncoderDepths : public ::testing::TestWithParam<int> {};
+
+TEST_P(EncoderDepths, SimpleNetGivesFourScalesOfBoundedLeftAndRightDisparity) {
+  torch::manual_seed(0);
+  const NetworkOptions options = testing::TinyNetwork(GetParam());
+  SimpleNet net(options);
+  const DisparityPyramid d = net->forward(torch::rand({2, 3, 32, 64}));
+  ExpectPyramidShapes(d, 2, 32, 64);
+  for (int s = 0; s < 4; ++s) {
+    EXPECT_GT(d.left[s].min().item<double>(), 0.0);
+    EXPECT_LT(d.left[s].max().item<double>(), options.max_disparity);  // max * sigmoid
+  }
+}
+INSTANTIATE_TEST_SUITE_P(ResNet, EncoderDepths, ::testing::Values(18, 34, 50));
+
+TEST(Networks, OtherInputSizesAndWidthMultipliersWork) {
+  NetworkOptions options = testing::TinyNetwork();
+  options.width_multiplier = 0.25;
+  StackNet net(options);
+  const StackNetOutput out = net->forward(torch::rand({1, 3, 64, 96}));
+  ExpectPyramidShapes(out.simple, 1, 64, 96);
+  ExpectPyramidShapes(out.refined, 1, 64, 96);
+}
+
+TEST(Networks, ResidualInputsFollowThePaper) {
+  // Constant disparities of 1 px on a 8-wide ramp image: I_right_recons(x) = I(x + 1),
+  // I_left_recons(x) = I_right_recons(x - 1) = I(x) away from the borders.
+  const torch::Tensor image = torch::arange(8, torch::kFloat32).view({1, 1, 1, 8}).expand({1, 3, 2, 8}).contiguous();
+  const torch::Tensor d = torch::full({1, 1, 2, 8}, 1.0 / 8);
+  const ResidualInputs in = MakeResidualInputs(image, d, d);
+  EXPECT_EQ(in.stacked.size(1), 13);  // 3 + 1 + 3 + 3 + 3 channels
+  EXPECT_NEAR(in.right_reconstruction[0][0][0][3].item<double>(), 4.0, 1e-4);
+  EXPECT_NEAR(in.left_reconstruction[0][0][0][3].item<double>(), 3.0, 1e-4);
+  EXPECT_NEAR(in.error[0][0][0][3].item<double>(), 0.0, 1e-4);
+  // Left border: recons(0) = right_recons(-1) -> border-clamped to right_recons(0) = I(1).
+  EXPECT_NEAR(in.error[0][0][0][0].item<double>(), 1.0, 1e-4);
+  // Channel 3 is disp_simple_0^left.
+  EXPECT_TRUE(torch::equal(in.stacked.narrow(1, 3, 1), d));
+}
+
+TEST(Networks, ResidualNetHasTwelveResidualBlocksAndStartsAtZero) {
+  torch::manual_seed(1);
+  const NetworkOptions options = testing::TinyNetwork();
+  StackNet net(options);
+  int blocks = 0;
+  for (const auto& child : net->residual_net()->named_modules()) {
+    if (dynamic_cast<const ResidualUnitImpl*>(child.value().get())) ++blocks;
+  }
+  EXPECT_EQ(blocks, 12);
+  // Zero-initialised residual heads: StackNet starts exactly at SimpleNet.
+  const StackNetOutput out = net->forward(torch::rand({1, 3, 32, 64}));
+  for (int s = 0; s < 4; ++s) EXPECT_TRUE(torch::equal(out.simple.left[s], out.refined.left[s]));
+}
+
+TEST(Networks, StageTwoTrainsResidualNetAndLeavesSimpleNetBitIdentical) {
+  torch::manual_seed(2);
+  StackNet net(testing::TinyNetwork());
+  StageOptions stage;
+  stage.model = "stack";
+  stage.learning_rate = 1e-3;
+  torch::optim::Adam optimizer(PrepareStage(net, stage), torch::optim::AdamOptions(stage.learning_rate));
+  std::vector<torch::Tensor> simple_before, residual_before;
+  for (const auto& p : net->simple_net()->parameters()) simple_before.push_back(p.detach().clone());
+  for (const auto& p : net->residual_net()->parameters()) residual_before.push_back(p.detach().clone());
+  const StereoBatch batch = testing::SyntheticBatch(2, 32, 64, 4, 7);
+  for (int step = 0; step < 3; ++step) TrainStep(net, optimizer, stage, LossOptions{}, batch);
+  const auto simple_after = net->simple_net()->parameters();
+  for (size_t i = 0; i < simple_after.size(); ++i) {
+    EXPECT_TRUE(torch::equal(simple_after[i], simple_before[i])) << "SimpleNet parameter " << i << " changed";
+    EXPECT_FALSE(simple_after[i].grad().defined() && simple_after[i].grad().abs().sum().item<double>() > 0);
+  }
+  // Gradients reached every ResidualNet parameter, down to the first layer (stem).
+  const auto residual_after = net->residual_net()->named_parameters();
+  int changed = 0;
+  for (size_t i = 0; i < residual_after.size(); ++i) {
+    if (!torch::equal(residual_after[i].value(), residual_before[i])) ++changed;
+  }
+  EXPECT_EQ(changed, static_cast<int>(residual_after.size()));
+  EXPECT_GT(net->residual_net()->named_parameters()["stem.weight"].grad().abs().sum().item<double>(), 0.0);
+}
+
+}  // namespace
+}  // namespace dvso::stacknet

@@ -1,0 +1,166 @@
+// Training: a tiny network overfits one batch; a few CPU steps on simulator
+// data through the full Trainer (stages, checkpoints, logs); exact resume;
+// config strictness and the learning-rate schedule.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+
+#include "core/error.h"
+#include "stacknet/config.h"
+#include "stacknet/data_loader.h"
+#include "stacknet/dataset.h"
+#include "stacknet/trainer.h"
+#include "stacknet_test_util.h"
+
+namespace dvso::stacknet {
+namespace {
+namespace fs = std::filesystem;
+
+std::string TempDir(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("dvso_stacknet_" + name + "_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir.string();
+}
+
+TEST(Training, TinyNetworkOverfitsOneBatch) {
+  at::set_num_threads(1);
+  torch::manual_seed(5);
+  StackNet net(testing::TinyNetwork());
+  StageOptions stage;
+  stage.model = "simple";
+  stage.learning_rate = 2e-3;
+  torch::optim::Adam optimizer(PrepareStage(net, stage), torch::optim::AdamOptions(stage.learning_rate));
+  const StereoBatch batch = testing::SyntheticBatch(2, 32, 64, 4, 11);
+  const double first = TrainStep(net, optimizer, stage, LossOptions{}, batch).total.item<double>();
+  double last = first;
+  for (int step = 0; step < 150; ++step) last = TrainStep(net, optimizer, stage, LossOptions{}, batch).total.item<double>();
+  EXPECT_LT(last, first / 5.0) << "first " << first << " last " << last;
+}
+
+TEST(Config, UnknownKeysAreErrorsAndYamlRoundTrips) {
+  EXPECT_THROW(ParseConfig("network: {encoder_depht: 18}\n", "x.yaml", false), Error);
+  EXPECT_THROW(ParseConfig("netwrk: {}\n", "x.yaml", false), Error);
+  EXPECT_THROW(ParseConfig("stages: [{name: a, epochz: 3}]\n", "x.yaml", false), Error);
+  EXPECT_THROW(ParseConfig("network: {encoder_depth: 19}\ndata: {sequences: [a]}\nstages: [{}]\n"), Error);
+  const StackNetConfig paper = LoadConfig(std::string(DVSO_TEST_DATA_DIR) + "/../configs/stacknet_paper.yaml");
+  EXPECT_EQ(paper.network.encoder_depth, 50);
+  EXPECT_EQ(paper.network.input_width, 512);
+  EXPECT_EQ(paper.stages.size(), 6u);
+  EXPECT_EQ(paper.stages[3].model, "stack");
+  EXPECT_FALSE(paper.stages[1].use_supervised);
+  EXPECT_FALSE(paper.stages[2].use_unsupervised);
+  EXPECT_EQ(ConfigToYaml(ParseConfig(ConfigToYaml(paper))), ConfigToYaml(paper));
+  // Paper 5.1: 1e-4 for 50 epochs, then halved every 15 epochs.
+  EXPECT_DOUBLE_EQ(paper.stages[0].LearningRateAt(49), 1e-4);
+  EXPECT_DOUBLE_EQ(paper.stages[0].LearningRateAt(50), 5e-5);
+  EXPECT_DOUBLE_EQ(paper.stages[0].LearningRateAt(64), 5e-5);
+  EXPECT_DOUBLE_EQ(paper.stages[0].LearningRateAt(65), 2.5e-5);
+  EXPECT_DOUBLE_EQ(paper.stages[1].LearningRateAt(39), 5e-5);
+}
+
+TEST(Data, SparseLabelsKeepTheirValuesScaledWithTheWidth) {
+  cv::Mat sparse = cv::Mat::zeros(4, 8, CV_32F);
+  sparse.at<float>(1, 5) = 10.0f;
+  const cv::Mat half = ResizeSparseDisparity(sparse, 4, 2);
+  EXPECT_EQ(cv::countNonZero(half), 1);
+  EXPECT_FLOAT_EQ(half.at<float>(0, 2), 5.0f);
+}
+
+TEST(Data, EpochOrderIsAPermutationThatDependsOnEpoch) {
+  auto a = EpochOrder(50, 1, 0, 0);
+  auto b = EpochOrder(50, 1, 0, 1);
+  EXPECT_NE(a, b);
+  EXPECT_EQ(a, EpochOrder(50, 1, 0, 0));
+  std::sort(a.begin(), a.end());
+  for (int i = 0; i < 50; ++i) EXPECT_EQ(a[i], i);
+}
+
+class SimulatedTraining : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    sequence_ = TempDir("sim") + "/seq";
+    const std::string command = std::string(DVSO_BINARY) + " simulate --out " + sequence_ +
+                                " --count 8 --width 128 --height 64 --color > /dev/null 2>&1";
+    ASSERT_EQ(std::system(command.c_str()), 0) << command;
+  }
+  StackNetConfig TinyConfig(const std::string& output_dir) const {
+    StackNetConfig config = LoadConfig(std::string(DVSO_TEST_DATA_DIR) + "/../configs/stacknet_tiny.yaml", false);
+    config.data.sequences = {sequence_};
+    config.train.output_dir = output_dir;
+    config.Check();
+    return config;
+  }
+  static std::string sequence_;
+};
+std::string SimulatedTraining::sequence_;
+
+TEST_F(SimulatedTraining, DatasetReadsPairsAndSparseGtLabels) {
+  const StackNetConfig config = TinyConfig(TempDir("data"));
+  const StereoDataset dataset(config.data, 64, 32);
+  ASSERT_EQ(dataset.size(), 8);
+  const StereoSample s = dataset.Load(3);
+  EXPECT_EQ(s.left.sizes(), (std::vector<int64_t>{3, 32, 64}));
+  EXPECT_GT(s.left.max().item<double>(), 0.0);
+  EXPECT_LE(s.left.max().item<double>(), 1.0);
+  const double labelled = s.left_mask.mean().item<double>();
+  EXPECT_GT(labelled, 0.0);
+  EXPECT_LT(labelled, 0.2);  // sparse
+  EXPECT_GT(s.right_mask.sum().item<double>(), 0.0);
+  // Labels are width fractions of plausible disparities.
+  const torch::Tensor values = s.left_label.masked_select(s.left_mask > 0);
+  EXPECT_GT(values.min().item<double>(), 0.0);
+  EXPECT_LT(values.max().item<double>(), 0.5);
+}
+
+TEST_F(SimulatedTraining, FewCpuStepsThroughAllStagesWriteCheckpointsAndLogs) {
+  const std::string out = TempDir("train");
+  Trainer trainer(TinyConfig(out));
+  const TrainResult result = trainer.Run();
+  EXPECT_TRUE(result.finished);
+  EXPECT_EQ(result.position.global_step, 4);  // 2 stages x 2 steps
+  EXPECT_TRUE(std::isfinite(result.last_loss));
+  for (const char* file : {"checkpoint_final.pt", "checkpoint_last.pt", "checkpoint_stage0_simple_semi.pt",
+                           "checkpoint_stage1_stack_semi.pt", "losses.csv", "epochs.jsonl", "config.yaml"}) {
+    EXPECT_TRUE(fs::exists(out + "/" + file)) << file;
+  }
+  std::ifstream csv(out + "/losses.csv");
+  int lines = 0;
+  for (std::string line; std::getline(csv, line);) ++lines;
+  EXPECT_EQ(lines, 5);  // header + 4 steps
+  EXPECT_EQ(ReadCheckpointInfo(out + "/checkpoint_final.pt").trained_model, "stack");
+  EXPECT_EQ(ReadCheckpointInfo(out + "/checkpoint_stage0_simple_semi.pt").trained_model, "simple");
+}
+
+TEST_F(SimulatedTraining, ResumeAfterAnInterruptionContinuesExactly) {
+  at::set_num_threads(1);
+  StackNetConfig config = TinyConfig(TempDir("full"));
+  config.stages[0].max_steps_per_epoch = 3;
+  config.stages[0].epochs = 2;
+  config.train.num_threads = 1;
+  Trainer full(config);
+  ASSERT_TRUE(full.Run().finished);
+
+  config.train.output_dir = TempDir("resumed");
+  Trainer interrupted(config, [](const TrainingPosition& p) { return p.global_step == 2; });
+  const TrainResult stop = interrupted.Run();
+  ASSERT_TRUE(stop.interrupted);
+  EXPECT_EQ(stop.position.stage, 0);
+  EXPECT_EQ(stop.position.batch, 2);
+  Trainer resumed(config);
+  const TrainResult done = resumed.Run(stop.last_checkpoint);
+  ASSERT_TRUE(done.finished);
+  EXPECT_EQ(done.position.global_step, 8);  // 2 x 3 + 2
+
+  const auto a = full.model()->named_parameters();
+  const auto b = resumed.model()->named_parameters();
+  ASSERT_EQ(a.size(), b.size());
+  for (size_t i = 0; i < a.size(); ++i) {
+    EXPECT_TRUE(torch::equal(a[i].value(), b[i].value())) << a[i].key() << " differs after resume";
+  }
+}
+
+}  // namespace
+}  // namespace dvso::stacknet
