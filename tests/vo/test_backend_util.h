@@ -43,47 +43,75 @@ inline ImagePyramidPtr MakePyramid(const cv::Mat& image, const PinholeCamera& ca
 
 // Solid texture (a sum of sinusoids in world coordinates), 0..255 range.
 inline double Texture(const Eigen::Vector3d& X) {
-  return 128.0 + 38.0 * std::sin(3.1 * X.x() + 1.3 * X.y()) + 28.0 * std::sin(2.3 * X.y() - 1.7 * X.z() + 0.5) +
-         24.0 * std::sin(4.1 * X.z() + 2.9 * X.x()) + 18.0 * std::sin(5.3 * X.x() - 4.7 * X.y() + 1.1) +
-         12.0 * std::sin(7.9 * X.y() + 6.1 * X.x() + 0.3 * X.z());
+  const Eigen::Vector3d Y = 2.0 * X;  // image periods of ~20-60 px at the scene depths
+  return 128.0 + 38.0 * std::sin(3.1 * Y.x() + 1.3 * Y.y()) + 28.0 * std::sin(2.3 * Y.y() - 1.7 * Y.z() + 0.5) +
+         24.0 * std::sin(4.1 * Y.z() + 2.9 * Y.x()) + 18.0 * std::sin(5.3 * Y.x() - 4.7 * Y.y() + 1.1) +
+         12.0 * std::sin(7.9 * Y.y() + 6.1 * Y.x() + 0.3 * Y.z());
 }
 
-// A "room" of planes n . X = d (world frame): back wall, floor, left wall.
+// A "room" of planes n . X = d (world frame): back wall, floor, side walls.
 struct PlaneScene {
   std::vector<Eigen::Vector4d> planes = {
-      {0, 0, 1, 12.0},   // back wall z = 12
-      {0, 1, 0, 2.0},    // floor y = 2 (y points down)
-      {1, 0, 0, -5.0},   // left wall x = -5
+      {0, 0, 1, 7.0},    // back wall z = 7
+      {0, 1, 0, 1.5},    // floor y = 1.5 (y points down)
+      {1, 0, 0, -3.0},   // left wall x = -3
+      {1, 0, 0, 3.5},    // right wall x = 3.5
   };
 
   // Depth (camera z) of the first surface hit by the ray through (u, v); +inf if none.
   double DepthAt(const Eigen::Isometry3d& world_to_camera, const PinholeCamera& camera, double u, double v,
-                 Eigen::Vector3d* world_point = nullptr) const {
+                 Eigen::Vector3d* world_point = nullptr, int* plane_index = nullptr) const {
     const Eigen::Isometry3d camera_to_world = world_to_camera.inverse();
     const Eigen::Vector3d origin = camera_to_world.translation();
     const Eigen::Vector3d ray_cam = camera.Unproject(u, v);  // z = 1
     const Eigen::Vector3d dir = camera_to_world.linear() * ray_cam;
     double best = std::numeric_limits<double>::infinity();
-    for (const Eigen::Vector4d& p : planes) {
+    for (size_t i = 0; i < planes.size(); ++i) {
+      const Eigen::Vector4d& p = planes[i];
       const double denom = p.head<3>().dot(dir);
       if (std::abs(denom) < 1e-12) continue;
       const double s = (p(3) - p.head<3>().dot(origin)) / denom;  // s = camera z since ray z = 1
-      if (s > 0.1 && s < best) best = s;
+      if (s > 0.1 && s < best) {
+        best = s;
+        if (plane_index != nullptr) *plane_index = static_cast<int>(i);
+      }
     }
     if (world_point != nullptr && std::isfinite(best)) *world_point = origin + best * dir;
     return best;
   }
 
+  // 3x3 supersampled (box filter over the pixel) to limit aliasing.
   cv::Mat Render(const Eigen::Isometry3d& world_to_camera, const PinholeCamera& camera) const {
     cv::Mat image(camera.height, camera.width, CV_32FC1);
     for (int y = 0; y < camera.height; ++y) {
       for (int x = 0; x < camera.width; ++x) {
-        Eigen::Vector3d X;
-        const double z = DepthAt(world_to_camera, camera, x, y, &X);
-        image.at<float>(y, x) = std::isfinite(z) ? static_cast<float>(Texture(X)) : 128.0f;
+        double sum = 0.0;
+        for (int sy = -1; sy <= 1; ++sy) {
+          for (int sx = -1; sx <= 1; ++sx) {
+            Eigen::Vector3d X;
+            const double z = DepthAt(world_to_camera, camera, x + sx / 3.0, y + sy / 3.0, &X);
+            sum += std::isfinite(z) ? Texture(X) : 128.0;
+          }
+        }
+        image.at<float>(y, x) = static_cast<float>(sum / 9.0);
       }
     }
     return image;
+  }
+
+  // True when the whole neighbourhood of radius r around (u, v) lies on one plane.
+  bool OnSinglePlane(const Eigen::Isometry3d& world_to_camera, const PinholeCamera& camera, double u, double v,
+                     double r) const {
+    int first = -1;
+    for (int dy = -1; dy <= 1; ++dy) {
+      for (int dx = -1; dx <= 1; ++dx) {
+        int index = -1;
+        DepthAt(world_to_camera, camera, u + dx * r, v + dy * r, nullptr, &index);
+        if (first < 0) first = index;
+        if (index != first || index < 0) return false;
+      }
+    }
+    return true;
   }
 };
 
@@ -165,6 +193,7 @@ inline SceneWindow BuildSceneWindow(const WindowOptions& options, const SceneWin
     for (int y = 16; y < spec.height - 16; y += spec.grid_step) {
       for (int x = 16; x < spec.width - 16; x += spec.grid_step) {
         if (level.GradSq(x, y) < 25.0f) continue;
+        if (!scene.OnSinglePlane(sw.true_world_to_camera[h], sw.camera.left, x, y, 4.0)) continue;
         const double z = scene.DepthAt(sw.true_world_to_camera[h], sw.camera.left, x, y);
         const double d = 1.0 / z;
         const double d0 = d * std::max(0.3, 1.0 + spec.idepth_noise * normal(rng)) / spec.scale;

@@ -15,6 +15,24 @@ Eigen::VectorXd FirstEstimateDifference(const std::vector<Keyframe>& keyframes) 
   return dx;
 }
 
+void SyncFreeLinearizationPoints(std::vector<Keyframe>* keyframes) {
+  for (Keyframe& kf : *keyframes) {
+    if (kf.fej_fixed) continue;
+    kf.world_to_camera_fej = kf.world_to_camera;
+    kf.a_fej = kf.a;
+    kf.b_fej = kf.b;
+  }
+}
+
+void FixConnectedLinearizationPoints(const Eigen::MatrixXd& prior_H, std::vector<Keyframe>* keyframes) {
+  for (size_t i = 0; i < keyframes->size(); ++i) {
+    if (prior_H.rows() == static_cast<Eigen::Index>(kFrameParams * keyframes->size()) &&
+        prior_H.middleRows<kFrameParams>(kFrameParams * i).cwiseAbs().maxCoeff() > 0.0) {
+      (*keyframes)[i].fej_fixed = true;
+    }
+  }
+}
+
 void AbsoluteFramePrior(const Keyframe& kf, Matrix8d* H, Vector8d* b, double* energy) {
   Vector8d e;
   e.head<6>() = PoseDifference(kf.world_to_camera, kf.prior_pose);

@@ -19,6 +19,13 @@
 
 namespace dvso::vo {
 
+// Moves the linearisation point of every keyframe not yet connected to the
+// prior (fej_fixed false) to its current estimate.
+void SyncFreeLinearizationPoints(std::vector<Keyframe>* keyframes);
+
+// Marks keyframes whose prior block is non-zero as having a fixed linearisation point.
+void FixConnectedLinearizationPoints(const Eigen::MatrixXd& prior_H, std::vector<Keyframe>* keyframes);
+
 // dx = x [-] x0 of every keyframe, stacked in window order (8 per keyframe).
 Eigen::VectorXd FirstEstimateDifference(const std::vector<Keyframe>& keyframes);
 

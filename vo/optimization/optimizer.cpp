@@ -52,6 +52,7 @@ OptimizationSummary Window::Optimize(int max_iterations) {
   OptimizationSummary summary;
   if (keyframes_.empty()) return summary;
   const std::vector<PointRef> refs = CollectPoints(keyframes_);
+  SyncFreeLinearizationPoints(&keyframes_);
 
   auto linearizer = std::make_unique<WindowLinearizer>(&keyframes_, camera_, options_);
   linearizer->Linearize(refs);
@@ -90,6 +91,7 @@ OptimizationSummary Window::Optimize(int max_iterations) {
       continue;
     }
     ++summary.accepted_steps;
+    SyncFreeLinearizationPoints(&keyframes_);
     lambda = std::max(lambda * 0.25, 1e-9);
     const bool converged =
         step.frames.norm() < options_.convergence_step &&

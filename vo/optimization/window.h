@@ -102,9 +102,13 @@ struct Keyframe {
   Eigen::Isometry3d world_to_camera = Eigen::Isometry3d::Identity();  // current estimate T_cw
   double a = 0.0, b = 0.0;              // current affine brightness
   // Linearisation point (first estimate, FEJ): the prior is expanded around it
-  // and the pose Jacobians are evaluated at it.
+  // and the pose Jacobians are evaluated at it. It follows the estimate until
+  // the keyframe first receives information in the marginalisation prior
+  // (fej_fixed), then stays fixed so prior and residuals agree on the
+  // unobservable directions.
   Eigen::Isometry3d world_to_camera_fej = Eigen::Isometry3d::Identity();
   double a_fej = 0.0, b_fej = 0.0;
+  bool fej_fixed = false;
   // Absolute priors on this keyframe's 8 parameters [xi(6), a, b] around
   // (prior_pose, 0, 0): diagonal weights, 0 = none. Carried into the
   // marginalisation prior when the keyframe leaves.

@@ -26,6 +26,9 @@ std::vector<MarginalizedPoint> Window::MarginalizeKeyframe(int id) {
   }
   Require(index >= 0, "window: MarginalizeKeyframe: no keyframe with id " + std::to_string(id));
 
+  // Keyframes not yet in the prior are linearised at their current estimate.
+  SyncFreeLinearizationPoints(&keyframes_);
+
   // 1. States of the hosted points' residuals at the current estimate.
   std::vector<PointRef> hosted = CollectPoints(keyframes_, index);
   std::vector<MarginalizedPoint> leaving;
@@ -77,8 +80,10 @@ std::vector<MarginalizedPoint> Window::MarginalizeKeyframe(int id) {
   // 4. Schur complement of the keyframe's parameters out of the prior.
   MarginalizeBlock(kFrameParams * index, kFrameParams, &prior_H_, &prior_b_);
 
-  // 5. Drop the keyframe, its points, and all residuals into it.
+  // 5. Drop the keyframe, its points, and all residuals into it; keyframes
+  //    that now carry prior information keep their linearisation point.
   keyframes_.erase(keyframes_.begin() + index);
+  FixConnectedLinearizationPoints(prior_H_, &keyframes_);
   for (Keyframe& kf : keyframes_) {
     for (Point& p : kf.points) {
       p.residuals.erase(std::remove_if(p.residuals.begin(), p.residuals.end(),
