@@ -85,7 +85,7 @@ void AddBuilding(Placement& pl, const Vec3& front_mid, const Vec3& forward, cons
   roof.axis_u = pl.scene->horizontal_a / 4.0;
   roof.axis_v = pl.scene->horizontal_b / 4.0;
   pl.builder->BeginChunk();
-  pl.builder->AddBox(base, forward, length, depth, height + below, facade, 6.4, pl.builder->AddSurface(roof));
+  pl.builder->AddShadowBox(base, forward, length, depth, height + below, facade, 6.4, pl.builder->AddSurface(roof));
   pl.builder->EndChunk();
   pl.scene->num_buildings++;
 }
@@ -152,14 +152,14 @@ void AddCar(Placement& pl, const Vec3& base, const Vec3& forward, double length)
     for (int wheel_side = -1; wheel_side <= 1; wheel_side += 2)
       pl.builder->AddBox(base + forward * (axle * length * 0.33) + shadow.frame_right * (wheel_side * width * 0.4),
                          forward, 0.62, 0.24, 0.36, rubber, 1.0);
-  pl.builder->AddBox(base + up * 0.3, forward, length, width, pl.U(0.6, 0.75), paint, 2.0);
+  pl.builder->AddShadowBox(base + up * 0.3, forward, length, width, pl.U(0.6, 0.75), paint, 2.0);
   const double cabin = length * pl.U(0.45, 0.6);
   Surface roof = paint;
   roof.axis_u = forward / 2.0;
   roof.axis_v = shadow.frame_right / 2.0;
   roof.origin = base;
-  pl.builder->AddBox(base + up * 0.95 - forward * (length * 0.05), forward, cabin, width - 0.12, pl.U(0.45, 0.55),
-                     glass, 1.0, pl.builder->AddSurface(roof));
+  pl.builder->AddShadowBox(base + up * 0.95 - forward * (length * 0.05), forward, cabin, width - 0.12,
+                           pl.U(0.45, 0.55), glass, 1.0, pl.builder->AddSurface(roof));
   pl.builder->EndChunk();
   pl.scene->num_cars++;
 }
@@ -233,7 +233,7 @@ void Vegetation(Placement& pl, int side, double s_begin, double s_end) {
         const Vec3 centre = base + p.right * (sign * 0.6);
         if (pl.Free(centre, p.tangent, length, 1.2, Zone::kStreet, 0.1)) {
           pl.builder->BeginChunk();
-          pl.builder->AddBox(centre - pl.builder->up() * 0.2, p.tangent, length, 1.2, pl.U(1.0, 1.8), leaves, 1.5);
+          pl.builder->AddShadowBox(centre - pl.builder->up() * 0.2, p.tangent, length, 1.2, pl.U(1.0, 1.8), leaves, 1.5);
           pl.builder->EndChunk();
         }
       } else if (!pl.path.InZone(base, Zone::kStreet, 0.5)) {

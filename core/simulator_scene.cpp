@@ -84,6 +84,22 @@ void SceneBuilder::AddBox(const Eigen::Vector3d& base, const Eigen::Vector3d& fo
   AddQuad(c[0] + h, c[1] + h, c[2] + h, c[3] + h, up(), top_surface);
 }
 
+void SceneBuilder::AddShadowBox(const Eigen::Vector3d& base, const Eigen::Vector3d& forward, double length,
+                                double width, double height, Surface surface, double tile_metres, int top) {
+  ShadowBox box;
+  box.axis[0] = forward.normalized();
+  box.axis[1] = down_.cross(box.axis[0]).normalized();
+  box.axis[2] = up();
+  box.center = base + up() * (0.5 * height);
+  box.half[0] = 0.5 * length;
+  box.half[1] = 0.5 * width;
+  box.half[2] = 0.5 * height;
+  surface.caster_box = static_cast<int>(scene_->shadow_boxes.size());
+  scene_->shadow_boxes.push_back(box);
+  if (top >= 0) scene_->surfaces[top].caster_box = surface.caster_box;
+  AddBox(base, forward, length, width, height, surface, tile_metres, top);
+}
+
 void SceneBuilder::AddCylinder(const Eigen::Vector3d& base, double radius, double height, int sides,
                                Surface surface, double tile_metres) {
   const Eigen::Vector3d a = down_.unitOrthogonal(), b = down_.cross(a);
@@ -142,6 +158,13 @@ void SceneBuilder::AddBlob(const Eigen::Vector3d& center, double radius_h, doubl
   };
   surface.normal_mode = NormalMode::kEllipsoid;
   surface.shape_center = center;
+  // The lumpy blob casts the shadow of its mean ellipsoid.
+  ShadowEllipsoid shadow;
+  shadow.center = center;
+  shadow.radius_h = radius_h;
+  shadow.radius_v = radius_v;
+  surface.caster_ellipsoid = static_cast<int>(scene_->shadow_ellipsoids.size());
+  scene_->shadow_ellipsoids.push_back(shadow);
   surface.shape_radii = {radius_h, radius_v};
   for (const auto& tri : f2) {
     const Eigen::Vector3d p0 = place(v[tri[0]]), p1 = place(v[tri[1]]), p2 = place(v[tri[2]]);
@@ -357,6 +380,8 @@ Scene BuildStreetScene(StreetPath& path, const SceneOptions& options, uint64_t s
   SceneBuilder builder(&scene, scene.down);
   BuildStreetSurfaces(path, options, &builder, &scene);
   PlaceStreetObjects(path, options, seed, &builder, &scene);
+  if (options.shadows)
+    scene.shadows = ShadowCasters(scene.shadow_boxes, scene.shadow_ellipsoids, scene.down, scene.to_sun);
   return scene;
 }
 

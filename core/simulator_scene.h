@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "core/simulator_path.h"
+#include "core/simulator_shadows.h"
 #include "core/simulator_textures.h"
 
 namespace dvso::sim {
@@ -48,6 +49,8 @@ struct Surface {
   double frame_s0 = 0;
   float overlay_a = 0, overlay_b = 0, overlay_c = 0;  // overlay parameters (see Overlay)
   uint8_t overlay_flags = 0;
+  int caster_box = -1;        // shadow box this surface belongs to (not tested against itself)
+  int caster_ellipsoid = -1;  // shadow ellipsoid this surface belongs to
 };
 
 struct Triangle {
@@ -72,6 +75,10 @@ struct Scene {
   Eigen::Vector3d horizontal_b = Eigen::Vector3d::UnitZ();
   Eigen::Vector3d to_sun = Eigen::Vector3d(0.3, -0.8, 0.5).normalized();  // unit, towards the sun
   int num_buildings = 0, num_cars = 0, num_poles = 0, num_trees = 0;
+  // Occluders collected while placing objects, then indexed in `shadows`.
+  std::vector<ShadowBox> shadow_boxes;
+  std::vector<ShadowEllipsoid> shadow_ellipsoids;
+  ShadowCasters shadows;
 };
 
 struct SceneOptions {
@@ -79,6 +86,7 @@ struct SceneOptions {
   double car_density = 0.6;       // fraction of parking lanes occupied by cars (0..1)
   double tree_density = 0.5;      // relative number of trees, hedges and bushes (0..)
   double curb_height = 0.12;      // sidewalk height above the road (m)
+  bool shadows = true;            // sun shadows cast by buildings, cars, hedges and trees
 };
 
 // Builds the whole street along the path. Assigns each sample's StreetProfile
@@ -108,6 +116,9 @@ class SceneBuilder {
   // surface when >= 0.
   void AddBox(const Eigen::Vector3d& base, const Eigen::Vector3d& forward, double length, double width,
               double height, Surface surface, double tile_metres, int top = -1);
+  // The same box registered as a shadow caster (its faces are not tested against it).
+  void AddShadowBox(const Eigen::Vector3d& base, const Eigen::Vector3d& forward, double length, double width,
+                    double height, Surface surface, double tile_metres, int top = -1);
   // Vertical prism approximating a cylinder, smooth-shaded.
   void AddCylinder(const Eigen::Vector3d& base, double radius, double height, int sides, Surface surface,
                    double tile_metres);

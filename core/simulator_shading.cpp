@@ -93,7 +93,12 @@ Eigen::Vector3f Shader::Surface(const Triangle& triangle, const Eigen::Vector3d&
   }
   const double upness = -n.dot(scene_.down);  // 1 for ground, 0 for walls
   const float sky_light = static_cast<float>(0.55 + 0.2 * upness);
-  const float sun_light = static_cast<float>(0.75 * std::max(0.0, n.dot(scene_.to_sun)));
+  float sun_light = static_cast<float>(0.75 * std::max(0.0, n.dot(scene_.to_sun)));
+  if (sun_light > 0 && !scene_.shadows.empty()) {
+    const int skip = s.caster_box >= 0 ? ShadowCasters::BoxId(s.caster_box)
+                                       : (s.caster_ellipsoid >= 0 ? scene_.shadows.EllipsoidId(s.caster_ellipsoid) : -1);
+    sun_light *= 1.f - scene_.shadows.Occlusion(point + 0.02 * triangle.normal, skip);
+  }
   return s.tint * (albedo * (sky_light + sun_light));
 }
 

@@ -65,7 +65,7 @@ void WriteSimulationYaml(const std::string& path, const StreetSimulator& simulat
     out << "noise: " << (o.noise ? "true" : "false") << "\nnoise_sigma: " << o.noise_sigma << "\n";
     out << "color: " << (o.color ? "true" : "false") << "\n";
     out << "building_density: " << o.scene.building_density << "\ncar_density: " << o.scene.car_density
-        << "\ntree_density: " << o.scene.tree_density << "\n";
+        << "\ntree_density: " << o.scene.tree_density << "\nshadows: " << (o.scene.shadows ? "true" : "false") << "\n";
     out << "world: {triangles: " << scene.triangles.size() << ", buildings: " << scene.num_buildings
         << ", cars: " << scene.num_cars << ", poles: " << scene.num_poles << ", trees: " << scene.num_trees << "}\n";
     out << "path_length_m: " << summary.path_length << "\nrender_seconds: " << summary.seconds << "\n";

@@ -15,7 +15,7 @@ struct SimulateArgs {
   std::string output_dir;
   int width = 0, height = 0;  // 0 = KITTI size
   double fx = 0, fy = 0, cx = -1, cy = -1, baseline = 0;  // 0 / -1 = KITTI (scaled with the size)
-  bool no_exposure = false, no_vignetting = false, no_noise = false, quiet = false;
+  bool no_exposure = false, no_vignetting = false, no_noise = false, no_shadows = false, quiet = false;
   SimulatorOptions options;
 };
 
@@ -35,6 +35,7 @@ void Run(SimulateArgs& args) {
   o.exposure_drift = !args.no_exposure;
   o.vignetting = !args.no_vignetting;
   o.noise = !args.no_noise;
+  o.scene.shadows = !args.no_shadows;
   o.Check();
   const auto& c = o.camera.left;
   std::cout << "output      : " << args.output_dir << "\n"
@@ -46,7 +47,7 @@ void Run(SimulateArgs& args) {
             << (o.vignetting ? "on" : "off") << ", noise " << (o.noise ? "sigma " + std::to_string(o.noise_sigma) : "off")
             << "\n"
             << "world       : seed " << o.seed << ", buildings " << o.scene.building_density << ", cars "
-            << o.scene.car_density << ", trees " << o.scene.tree_density << ", colour " << (o.color ? "on" : "off")
+            << o.scene.car_density << ", trees " << o.scene.tree_density << ", shadows " << (o.scene.shadows ? "on" : "off") << ", colour " << (o.color ? "on" : "off")
             << ", threads " << o.num_threads << "\n";
   const SimulationSummary summary = WriteSimulatedSequence(o, args.output_dir, !args.quiet);
   std::cout << "wrote " << summary.frames << " frames (" << summary.path_length << " m) in " << summary.seconds
@@ -86,6 +87,7 @@ void AddSimulateCommand(CLI::App& app) {
   cmd->add_flag("--no-noise", args->no_noise, "no sensor noise");
   cmd->add_option("--noise-sigma", o.noise_sigma, "sensor noise std (grey levels)")->capture_default_str();
   cmd->add_flag("--color", o.color, "also write colour images image_2/ image_3/");
+  cmd->add_flag("--no-shadows", args->no_shadows, "no cast sun shadows");
   cmd->add_option("--building-density", o.scene.building_density, "fraction of the street lined by buildings")
       ->capture_default_str();
   cmd->add_option("--car-density", o.scene.car_density, "fraction of parking lanes with cars")->capture_default_str();
