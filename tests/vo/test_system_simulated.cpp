@@ -1,0 +1,150 @@
+// End-to-end odometry on short `dvso simulate` sequences (the StreetSimulator
+// rendered in memory at a small size so CI stays short): stereo must track
+// every frame with metric scale; mono must track with a bounded Sim(3)-aligned
+// error. One CLI run checks the files `dvso odometry` writes.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+
+#include "core/alignment.h"
+#include "core/simulator.h"
+#include "core/trajectory.h"
+#include "vo/system/output_writers.h"
+#include "vo/system/system.h"
+
+namespace dvso::vo {
+namespace {
+
+constexpr int kFrames = 40;
+
+struct SimulatedSequence {
+  StereoCamera camera;
+  std::vector<cv::Mat> left, right;
+  std::vector<Eigen::Isometry3d> truth;  // camera-to-world, first = identity
+  double path_length = 0;
+};
+
+const SimulatedSequence& Sequence() {
+  static const SimulatedSequence seq = [] {
+    SimulatorOptions o;
+    o.trajectory_path = std::string(DVSO_TEST_DATA_DIR) + "/kitti_poses/00.txt";
+    o.first_frame = 0;
+    o.num_frames = kFrames;
+    o.camera = StereoCamera{}.Resized(416, 128);
+    o.texture_size = 256;
+    o.num_threads = 2;
+    StreetSimulator sim(o);
+    SimulatedSequence s;
+    s.camera = sim.camera();
+    for (int i = 0; i < sim.num_frames(); ++i) {
+      const SimulatedFrame f = sim.Render(i);
+      s.left.push_back(f.left.grey);
+      s.right.push_back(f.right.grey);
+      s.truth.push_back(f.T_first_camera);
+      if (i > 0) s.path_length += (s.truth[i].translation() - s.truth[i - 1].translation()).norm();
+    }
+    return s;
+  }();
+  return seq;
+}
+
+struct RunOutcome {
+  Trajectory estimate;
+  int lost = 0, initializing = 0;
+};
+
+RunOutcome RunSystem(OdometryMode mode) {
+  const SimulatedSequence& seq = Sequence();
+  OdometryOptions options;
+  System system(options, seq.camera, mode);
+  TrajectoryRecorder recorder;
+  system.AddObserver(&recorder);
+  for (size_t i = 0; i < seq.left.size(); ++i) {
+    system.ProcessFrame(static_cast<int>(i), 0.1 * i, seq.left[i],
+                        mode == OdometryMode::kStereo ? seq.right[i] : cv::Mat());
+  }
+  system.Finish();
+  RunOutcome r;
+  r.estimate = recorder.Resolve();
+  r.lost = recorder.CountStatus(FrameStatus::kLost);
+  r.initializing = recorder.CountStatus(FrameStatus::kInitializing);
+  return r;
+}
+
+TEST(SystemSimulated, StereoTracksEveryFrameWithMetricScale) {
+  const SimulatedSequence& seq = Sequence();
+  ASSERT_GT(seq.path_length, 20.0);  // KITTI 00 start: ~0.86 m per frame
+  const RunOutcome r = RunSystem(OdometryMode::kStereo);
+  ASSERT_EQ(r.estimate.size(), seq.truth.size());
+  EXPECT_EQ(r.lost, 0);
+  EXPECT_EQ(r.initializing, 0);
+  double max_err = 0;
+  for (size_t i = 0; i < seq.truth.size(); ++i) {
+    max_err = std::max(max_err,
+                       (r.estimate.poses[i].T_world_camera.translation() - seq.truth[i].translation()).norm());
+  }
+  // Unaligned: metric scale from the static stereo residuals.
+  EXPECT_LT(max_err, 0.02 * seq.path_length) << "max error " << max_err << " m over " << seq.path_length << " m";
+  const double est_length = r.estimate.PathLength();
+  std::cout << "stereo: max error " << max_err << " m over " << seq.path_length << " m, length ratio "
+            << est_length / seq.path_length << "\n";
+  EXPECT_NEAR(est_length / seq.path_length, 1.0, 0.02);
+}
+
+TEST(SystemSimulated, MonoTracksWithBoundedSim3Error) {
+  const SimulatedSequence& seq = Sequence();
+  const RunOutcome r = RunSystem(OdometryMode::kMono);
+  ASSERT_EQ(r.estimate.size(), seq.truth.size());
+  EXPECT_EQ(r.lost, 0);
+  EXPECT_LE(r.initializing, 10);
+  std::vector<Eigen::Vector3d> est, gt;
+  for (size_t i = 0; i < seq.truth.size(); ++i) {
+    est.push_back(r.estimate.poses[i].T_world_camera.translation());
+    gt.push_back(seq.truth[i].translation());
+  }
+  const Similarity3 sim = UmeyamaAlignment(est, gt, AlignmentMode::kSim3);
+  double sq = 0;
+  for (size_t i = 0; i < est.size(); ++i) sq += (sim * est[i] - gt[i]).squaredNorm();
+  const double ate = std::sqrt(sq / est.size());
+  std::cout << "mono: Sim3 ATE " << ate << " m over " << seq.path_length << " m, " << r.initializing
+            << " initialising frames\n";
+  EXPECT_LT(ate, 0.02 * seq.path_length) << "Sim3 ATE " << ate << " m over " << seq.path_length << " m";
+}
+
+TEST(SystemSimulated, CliWritesEveryOutput) {
+  const std::string dir = ::testing::TempDir() + "/dvso_odometry_cli";
+  std::filesystem::remove_all(dir);
+  const std::string seq_dir = dir + "/seq";
+  const std::string out_dir = dir + "/out";
+  const std::string bin = DVSO_BINARY;
+  const std::string simulate = bin + " simulate --quiet --out " + seq_dir + " --count 12 --width 320 --height 96 " +
+                               "--texture-size 128 > " + dir + "_sim.log 2>&1";
+  std::filesystem::create_directories(dir);
+  ASSERT_EQ(std::system(simulate.c_str()), 0) << simulate;
+  const std::string odometry = bin + " odometry --sequence " + seq_dir + " --mode stereo --preset fast --first 2 " +
+                               "--count 8 --ply --no-progress --out " + out_dir + " > " + dir + "/odo.log 2>&1";
+  ASSERT_EQ(std::system(odometry.c_str()), 0) << odometry;
+  const Trajectory kitti = ReadTrajectory(out_dir + "/trajectory.txt", TrajectoryFormat::kKitti);
+  EXPECT_EQ(kitti.size(), 8u);  // one line per processed input frame
+  const Trajectory tum = ReadTrajectory(out_dir + "/trajectory_tum.txt", TrajectoryFormat::kTum);
+  EXPECT_EQ(tum.size(), 8u);
+  std::ifstream log(out_dir + "/run_log.csv");
+  int lines = 0;
+  for (std::string line; std::getline(log, line);) ++lines;
+  EXPECT_EQ(lines, 9);  // header + 8 frames
+  EXPECT_TRUE(std::filesystem::exists(out_dir + "/points.ply"));
+  EXPECT_TRUE(std::filesystem::exists(out_dir + "/config.yaml"));
+  std::ifstream printed(dir + "/odo.log");
+  const std::string text((std::istreambuf_iterator<char>(printed)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("active_points: 800"), std::string::npos);  // the loaded config is printed
+  // Strict config: a typo is an error with exit code 1.
+  std::ofstream(dir + "/bad.yaml") << "activ_points: 5\n";
+  const std::string bad = bin + " odometry --sequence " + seq_dir + " --config " + dir + "/bad.yaml --out " + dir +
+                          "/bad > /dev/null 2>&1";
+  EXPECT_NE(std::system(bad.c_str()), 0);
+}
+
+}  // namespace
+}  // namespace dvso::vo
