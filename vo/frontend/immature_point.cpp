@@ -119,6 +119,7 @@ TraceStatus ImmaturePoint::Trace(const PyramidLevel& target, const Eigen::Matrix
   error_px = std::min(error_px, 10.0f);
 
   // Discrete search.
+  const float energy_th = static_cast<float>(kPatternSize * opt.outlier_energy_per_pixel * opt.extra_slack_on_threshold);
   const float step = static_cast<float>(opt.step_size);
   const int num_steps = std::min(opt.max_steps, static_cast<int>(1.9999f + dist / step));
   const float sx = dx_unit * step, sy = dy_unit * step;
@@ -132,7 +133,10 @@ TraceStatus ImmaturePoint::Trace(const PyramidLevel& target, const Eigen::Matrix
     if (!target.InBounds(cu, cv, border)) {
       e = 1e10f;
     } else {
-      for (int k = 0; k < kPatternSize; ++k) {
+      // Early exit above the outlier threshold: such a sample can be neither a
+      // valid match nor a meaningful second best (its energy stays a lower
+      // bound, which only lowers the quality: conservative).
+      for (int k = 0; k < kPatternSize && e < energy_th; ++k) {
         const float hit = target.InterpolateIntensity(cu + kPatternOffsets[k][0], cv + kPatternOffsets[k][1]);
         e += HuberEnergy(hit - (a * color[k] + b), huber);
       }
@@ -182,7 +186,6 @@ TraceStatus ImmaturePoint::Trace(const PyramidLevel& target, const Eigen::Matrix
   }
   last_energy = best_energy;
 
-  const float energy_th = static_cast<float>(kPatternSize * opt.outlier_energy_per_pixel * opt.extra_slack_on_threshold);
   if (!(best_energy < energy_th)) {
     // Two outliers in a row: drop (DSO).
     if (last_status == TraceStatus::kOutlier) return last_status = TraceStatus::kOutOfBounds;

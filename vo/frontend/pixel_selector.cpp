@@ -153,27 +153,34 @@ std::vector<SelectedPixel> SelectWithBlockSize(const ImagePyramid& pyramid, cons
 
 }  // namespace
 
-std::vector<SelectedPixel> SelectPixels(const ImagePyramid& pyramid, const PixelSelectorOptions& options) {
+std::vector<SelectedPixel> SelectPixels(const ImagePyramid& pyramid, const PixelSelectorOptions& options,
+                                        double* block_size_hint) {
   options.Check();
   const PyramidLevel& l0 = pyramid.level(0);
   int nx = 0, ny = 0;
   const std::vector<float> thr_sq = RegionThresholdsSq(l0, options, &nx, &ny);
   const double area = static_cast<double>(l0.width) * l0.height;
   double pot = std::max(1.0, std::sqrt(area / options.desired_points) * 0.6);
+  if (block_size_hint != nullptr && *block_size_hint >= 1.0) pot = *block_size_hint;
   std::vector<SelectedPixel> best;
+  double best_pot = pot;
   for (int it = 0; it < options.max_adapt_iterations; ++it) {
     const int ipot = std::max(1, static_cast<int>(std::lround(pot)));
     std::vector<SelectedPixel> sel = SelectWithBlockSize(pyramid, options, thr_sq, nx, ipot);
     const double ratio = static_cast<double>(sel.size()) / options.desired_points;
     const bool closer = best.empty() || std::fabs(std::log(std::max<double>(sel.size(), 1) / options.desired_points)) <
                                             std::fabs(std::log(std::max<double>(best.size(), 1) / options.desired_points));
-    if (closer) best = std::move(sel);
+    if (closer) {
+      best = std::move(sel);
+      best_pot = pot;
+    }
     if (ratio > 0.8 && ratio < 1.25) break;
     // Count scales roughly with 1 / pot^2 (DSO makeMaps: sparsity * sqrt(quotient)).
     const double next = pot * std::sqrt(std::max(ratio, 0.05));
     if (ipot == 1 && next < 1) break;
     pot = std::max(1.0, next);
   }
+  if (block_size_hint != nullptr) *block_size_hint = best_pot;
   if (best.size() > static_cast<size_t>(options.desired_points) * 5 / 4) {
     // Too many (pot cannot shrink further / grow finely enough): deterministic random subsample.
     std::mt19937 rng(options.seed + 1);

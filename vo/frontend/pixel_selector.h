@@ -34,7 +34,11 @@ struct SelectedPixel {
 };
 
 // Selects pixels in `pyramid` (level 0 coordinates). Deterministic.
-std::vector<SelectedPixel> SelectPixels(const ImagePyramid& pyramid, const PixelSelectorOptions& options);
+// `block_size_hint` (optional, in/out): the block size that worked last time;
+// consecutive keyframes look alike, so starting from it usually saves the
+// adaptation passes (DSO keeps currentPotential across frames the same way).
+std::vector<SelectedPixel> SelectPixels(const ImagePyramid& pyramid, const PixelSelectorOptions& options,
+                                        double* block_size_hint = nullptr);
 
 // Per-pixel squared threshold map at level 0 (exposed for tests).
 std::vector<float> RegionThresholdsSq(const PyramidLevel& level, const PixelSelectorOptions& options, int* regions_x,

@@ -89,6 +89,7 @@ class System {
   double first_rmse_ = 0;        // rmse of the first frame tracked against the current reference
   double last_rmse_ = 0;
   double activation_cell_ = 0;   // adaptive activation grid cell (pixels)
+  double selector_block_size_ = 0;  // pixel selector block size that worked for the last keyframe
   int reference_id_ = -1;        // keyframe id the tracker uses
   Eigen::Isometry3d T_last_ref_ = Eigen::Isometry3d::Identity();   // last frame <- reference
   Eigen::Isometry3d velocity_ = Eigen::Isometry3d::Identity();     // last frame <- previous frame

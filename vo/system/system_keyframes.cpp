@@ -63,7 +63,7 @@ void System::TraceCandidates(const ImagePyramid& frame, const Eigen::Isometry3d&
 void System::AddCandidates(int keyframe_id, const ImagePyramid& left, const ImagePyramid* right) {
   KeyframeCandidates c;
   c.keyframe_id = keyframe_id;
-  const std::vector<SelectedPixel> pixels = SelectPixels(left, options_.selector);
+  const std::vector<SelectedPixel> pixels = SelectPixels(left, options_.selector, &selector_block_size_);
   c.points.reserve(pixels.size());
   const Eigen::Vector3f stereo_Kt(static_cast<float>(-camera_.FxB()), 0.f, 0.f);
   const float max_disparity = static_cast<float>(options_.stereo_max_disparity_fraction * camera_.left.width);
