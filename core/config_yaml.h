@@ -43,6 +43,9 @@ class YamlSection {
   // The reference stays valid as long as this section lives.
   YamlSection& Child(const std::string& key);
   bool Has(const std::string& key) const;
+  // Marks a key as handled elsewhere (e.g. a sub-map validated by another
+  // module's strict loader), so RequireAllKeysUsed() does not report it.
+  void MarkUsed(const std::string& key) { used_.insert(key); }
   // Throws dvso::Error naming every key of this section (and of the children
   // obtained through Child()) that no Read()/Child() asked for.
   void RequireAllKeysUsed() const;

@@ -38,7 +38,7 @@ LabelRunOptions LoadLabelRunOptions(const std::string& path) {
   labels.Read("occlusion_margin", &options.labels.projection.occlusion_margin);
   labels.Read("min_depth", &options.labels.projection.min_depth);
   labels.Read("max_disparity", &options.labels.projection.max_disparity);
-  root.Child("odometry");  // validated strictly by the odometry's own loader below
+  root.MarkUsed("odometry");  // validated strictly by the odometry's own loader below
   root.RequireAllKeysUsed();
   if (root.Has("odometry")) {
     std::stringstream text;

@@ -1,0 +1,99 @@
+// `dvso labels` end to end on a short simulated stereo sequence (small image
+// so CI stays short): every frame gets a label file, labels agree with the
+// exact GT disparity, and a second run resumes without recomputing.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "core/disparity_io.h"
+#include "core/error.h"
+#include "core/fs_util.h"
+#include "core/simulator.h"
+#include "sdso_labels/label_runner.h"
+
+namespace fs = std::filesystem;
+using namespace dvso;
+
+namespace {
+
+constexpr int kFrames = 40;
+
+const std::string& SimulatedSequenceDir() {
+  static const std::string dir = [] {
+    const std::string out = (fs::temp_directory_path() / ("dvso_labels_e2e_" + std::to_string(::getpid()))).string();
+    fs::remove_all(out);
+    SimulatorOptions o;
+    o.trajectory_path = std::string(DVSO_TEST_DATA_DIR) + "/kitti_poses/00.txt";
+    o.num_frames = kFrames;
+    o.camera = StereoCamera{}.Resized(416, 128);
+    o.texture_size = 256;
+    WriteSimulatedSequence(o, out, false);
+    return out;
+  }();
+  return dir;
+}
+
+}  // namespace
+
+TEST(LabelsEndToEnd, EveryFrameLabelledAndAccurateThenResumes) {
+  const std::string seq = SimulatedSequenceDir();
+  const std::string out = seq + "_labels";
+  labels::LabelRunOptions options;
+  options.progress = false;
+  options.gt_disparity_dir = seq + "/disp_0";
+  const labels::LabelRunSummary first = labels::RunLabelExtraction(seq, out, options);
+  EXPECT_FALSE(first.skipped_complete);
+  EXPECT_EQ(first.statistics.frames(), kFrames);
+  for (int i = 0; i < kFrames; ++i) {
+    const cv::Mat labels = ReadKittiMapPng(JoinPath(out, FrameFileName(i, ".png")));
+    EXPECT_EQ(labels.cols, 416);
+    EXPECT_EQ(labels.rows, 128);
+  }
+  EXPECT_GT(first.statistics.mean_labels_per_frame(), 100.0);
+  EXPECT_GT(first.statistics.compared(), 2000);
+  EXPECT_GT(first.statistics.share_within_1px(), 0.8);
+  EXPECT_LT(first.statistics.mean_absolute_error(), 1.5);
+  EXPECT_TRUE(fs::exists(out + "/labels_summary.json"));
+  EXPECT_TRUE(fs::exists(out + "/odometry/trajectory.txt"));
+
+  // Resume: all files exist, nothing is recomputed, the summary is the same.
+  const labels::LabelRunSummary second = labels::RunLabelExtraction(seq, out, options);
+  EXPECT_TRUE(second.skipped_complete);
+  EXPECT_EQ(second.statistics.compared(), first.statistics.compared());
+  EXPECT_NEAR(second.statistics.share_within_1px(), first.statistics.share_within_1px(), 0.01);
+
+  // A missing file makes the run incomplete again: it is recomputed.
+  fs::remove(JoinPath(out, FrameFileName(5, ".png")));
+  const labels::LabelRunSummary third = labels::RunLabelExtraction(seq, out, options);
+  EXPECT_FALSE(third.skipped_complete);
+  EXPECT_TRUE(fs::exists(JoinPath(out, FrameFileName(5, ".png"))));
+}
+
+TEST(LabelsEndToEnd, BatchListAndErrors) {
+  const std::string seq = SimulatedSequenceDir();
+  const std::string list = seq + "_list.txt";
+  std::ofstream(list) << "# sequences\n" << seq << "\n\n";
+  const auto sequences = labels::ReadSequenceList(list);
+  ASSERT_EQ(sequences.size(), 1u);
+  EXPECT_EQ(sequences[0], seq);
+  std::ofstream(list) << "# nothing\n";
+  EXPECT_THROW(labels::ReadSequenceList(list), Error);
+  labels::LabelRunOptions options;
+  options.progress = false;
+  options.gt_disparity_dir = seq + "/no_such_dir";
+  EXPECT_THROW(labels::RunLabelExtraction(seq, seq + "_bad", options), Error);
+}
+
+TEST(LabelsEndToEnd, ConfigIsStrict) {
+  const std::string dir = SimulatedSequenceDir() + "_cfg";
+  fs::create_directories(dir);
+  std::ofstream(dir + "/ok.yaml") << "preset: fast\nlabels:\n  min_good_residuals: 3\nodometry:\n  active_points: 500\n";
+  const labels::LabelRunOptions ok = labels::LoadLabelRunOptions(dir + "/ok.yaml");
+  EXPECT_EQ(ok.labels.min_good_residuals, 3);
+  EXPECT_EQ(ok.odometry.active_points, 500);
+  std::ofstream(dir + "/typo.yaml") << "labels:\n  min_good_residual: 3\n";
+  EXPECT_THROW(labels::LoadLabelRunOptions(dir + "/typo.yaml"), Error);
+  std::ofstream(dir + "/typo2.yaml") << "odometry:\n  active_pints: 3\n";
+  EXPECT_THROW(labels::LoadLabelRunOptions(dir + "/typo2.yaml"), Error);
+}
