@@ -109,8 +109,13 @@ float ShadowCasters::Occlusion(const Eigen::Vector3d& p, int skip) const {
         t1 = std::min(t1, std::max(ta, tb));
       }
       if (t1 <= t0) continue;
-      // Soft edge: the chord through the box grows from 0 at its silhouette.
-      occlusion = std::max(occlusion, Smoothstep((t1 - t0) / Penumbra(t0)));
+      // Soft edge: how deep inside the box the ray passes (at the middle of
+      // its chord) grows from 0 at the box's silhouette.
+      const double tm = 0.5 * (t0 + t1);
+      double depth = 1e300;
+      for (int k = 0; k < 3; ++k)
+        depth = std::min(depth, box.half[k] - std::abs(d.dot(box.axis[k]) + tm * to_sun_.dot(box.axis[k])));
+      occlusion = std::max(occlusion, Smoothstep(depth / (0.5 * Penumbra(t0))));
     } else {
       const ShadowEllipsoid& e = ellipsoids_[id - num_boxes];
       // Scale the vertical axis to turn the ellipsoid into a unit sphere.

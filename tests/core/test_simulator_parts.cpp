@@ -1,0 +1,153 @@
+// Unit tests of the simulator's building blocks: mip-mapped texture lookups,
+// the street path (road height, zones, revisit merging) and sun shadows.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "core/simulator_path.h"
+#include "core/simulator_shadows.h"
+#include "core/simulator_textures.h"
+
+namespace dvso::sim {
+namespace {
+
+TEST(SimulatorTexture, BilinearAndMipLevelsByHand) {
+  // 4x4 texture: value = x (column index) / 4.
+  std::vector<float> texels(16);
+  for (int y = 0; y < 4; ++y)
+    for (int x = 0; x < 4; ++x) texels[y * 4 + x] = x / 4.f;
+  const MipTexture t(texels, 4);
+  ASSERT_EQ(t.num_levels(), 3);  // 4x4, 2x2, 1x1
+  EXPECT_FLOAT_EQ(t.mean(), (0 + 0.25f + 0.5f + 0.75f) / 4);
+  // Texel centres sit at +0.5: x = 1.5 is exactly texel 1, x = 2.0 halfway between texels 1 and 2.
+  EXPECT_FLOAT_EQ(t.Bilinear(0, 1.5f, 0.5f), 0.25f);
+  EXPECT_FLOAT_EQ(t.Bilinear(0, 2.0f, 3.5f), 0.375f);
+  // Wrap-around between the last and the first texel.
+  EXPECT_FLOAT_EQ(t.Bilinear(0, 4.0f, 0.5f), 0.375f);
+  // Level 1 averages 2x2 blocks: columns (0, 0.25) -> 0.125 and (0.5, 0.75) -> 0.625.
+  EXPECT_FLOAT_EQ(t.Bilinear(1, 0.5f, 0.5f), 0.125f);
+  // A footprint covering the whole tile returns the mean, in any direction.
+  EXPECT_NEAR(t.Sample(0.3, 0.7, 64.f), t.mean(), 1e-6);
+  EXPECT_NEAR(t.SampleAniso(0.3, 0.7, 16.f, 0.f, 0.f, 16.f, 4), t.mean(), 1e-6);
+}
+
+TEST(SimulatorTexture, AnisotropicFilterKeepsDetailAcrossTheMajorAxis) {
+  // Stripes along v (value depends on u only, period 2 texels at 64 px).
+  const int n = 64;
+  std::vector<float> texels(n * n);
+  for (int y = 0; y < n; ++y)
+    for (int x = 0; x < n; ++x) texels[y * n + x] = (x / 8) % 2 ? 1.f : 0.f;  // 8-texel stripes
+  const MipTexture t(texels, n);
+  // Footprint: 1 texel across the stripes (u), 16 texels along them (v).
+  const float du = 1.f / n, dv = 16.f / n;
+  const float aniso_dark = t.SampleAniso(4.0 / n, 0.5, du, 0.f, 0.f, dv, 8);
+  const float aniso_bright = t.SampleAniso(12.0 / n, 0.5, du, 0.f, 0.f, dv, 8);
+  EXPECT_NEAR(aniso_dark, 0.f, 0.05f);
+  EXPECT_NEAR(aniso_bright, 1.f, 0.05f);
+  // An isotropic filter of the major axis blurs the stripes to grey.
+  EXPECT_NEAR(t.Sample(4.0 / n, 0.5, 16.f), 0.5f, 0.1f);
+}
+
+TEST(SimulatorTexture, BankIsDeterministicPerSeed) {
+  const TextureBank a(5, 64), b(5, 64), c(6, 64);
+  EXPECT_EQ(a[kTexAsphalt].Sample(0.3, 0.4, 1.f), b[kTexAsphalt].Sample(0.3, 0.4, 1.f));
+  EXPECT_NE(a[kTexAsphalt].Sample(0.3, 0.4, 1.f), c[kTexAsphalt].Sample(0.3, 0.4, 1.f));
+  for (int id = 0; id < kNumTextures; ++id) {
+    EXPECT_GT(a[id].mean(), 0.f) << id;
+    EXPECT_LE(a[id].mean(), 1.f) << id;
+  }
+}
+
+std::vector<Eigen::Isometry3d> StraightPath(int n, double step, double climb_per_step) {
+  std::vector<Eigen::Isometry3d> poses;
+  for (int i = 0; i < n; ++i) {
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.translation() = Eigen::Vector3d(0, -climb_per_step * i, step * i);  // y down: climbing = -y
+    poses.push_back(T);
+  }
+  return poses;
+}
+
+TEST(SimulatorPath, RoadFollowsTheCameraHeightAndZonesAreLateral) {
+  const StreetPath path(StraightPath(101, 1.0, 0.02), 1.65, 2.0, 50.0);
+  EXPECT_TRUE(path.down().isApprox(Eigen::Vector3d::UnitY(), 1e-12));
+  EXPECT_NEAR(path.PoseArcLength(100), 100.0, 1e-9);
+  const PathSample& mid = path.samples()[path.SampleAt(50.0)];
+  EXPECT_NEAR(mid.s, 50.0, 1e-9);
+  // Camera at (0, -1.0, 50) climbing 2 %: road 1.65 m below it.
+  EXPECT_NEAR(mid.road.y(), -1.0 + 1.65, 1e-6);
+  EXPECT_NEAR(mid.road.z(), 50.0, 1e-9);
+  EXPECT_TRUE(mid.right.isApprox(Eigen::Vector3d::UnitX(), 1e-9));
+  // Default profile: road from -5.5 to 2.0 m, sidewalks 2.5 m.
+  EXPECT_TRUE(path.InZone(mid.road + Eigen::Vector3d(1.0, 0, 0), Zone::kLane, 0.0));
+  EXPECT_FALSE(path.InZone(mid.road + Eigen::Vector3d(1.8, 0, 0), Zone::kLane, 0.0));
+  EXPECT_TRUE(path.InZone(mid.road + Eigen::Vector3d(-5.0, 0, 0), Zone::kRoad, 0.0));
+  EXPECT_FALSE(path.InZone(mid.road + Eigen::Vector3d(3.0, 0, 0), Zone::kRoad, 0.0));
+  EXPECT_TRUE(path.InZone(mid.road + Eigen::Vector3d(3.0, 0, 0), Zone::kStreet, 0.0));
+  EXPECT_FALSE(path.InZone(mid.road + Eigen::Vector3d(6.0, 0, 0), Zone::kStreet, 0.0));
+  // The street extends straight beyond the last pose.
+  EXPECT_NEAR(path.samples().back().s, 150.0, 2.0);
+}
+
+TEST(SimulatorPath, DrivingBackAlongTheSameStreetIsMerged) {
+  // 100 m forward, a U-turn 3 m to the left, 100 m back.
+  std::vector<Eigen::Isometry3d> poses = StraightPath(101, 1.0, 0.0);
+  for (int i = 0; i <= 100; ++i) {
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.linear() = Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitY()).toRotationMatrix();
+    T.translation() = Eigen::Vector3d(-3.0, 0, 100.0 - i);
+    poses.push_back(T);
+  }
+  StreetPath path(poses, 1.65, 2.0, 20.0);
+  for (auto& s : path.mutable_samples()) s.profile.left_edge = -2.0;  // narrow one-way street
+  path.MergeRevisits(4.0, 60.0);
+  int merged = 0;
+  for (const auto& s : path.samples()) merged += s.merged_into >= 0;
+  EXPECT_GT(merged, 35);  // most of the way back
+  // The first pass's street now holds the return lane (3 m left, +-2 m).
+  const PathSample& first = path.samples()[path.SampleAt(30.0)];
+  EXPECT_LE(first.profile.left_edge, -3.0 - 2.0 + 1e-9);
+  EXPECT_TRUE(path.InZone(first.road + Eigen::Vector3d(-3.0, 0, 0), Zone::kRoad, 0.0));
+}
+
+TEST(SimulatorShadows, BoxShadowIsCastAwayFromTheSun) {
+  const Eigen::Vector3d down = Eigen::Vector3d::UnitY();
+  const Eigen::Vector3d to_sun = Eigen::Vector3d(1, -1, 0).normalized();  // 45 degrees, towards +x
+  ShadowBox box;
+  box.center = Eigen::Vector3d(0, -5, 0);  // 10 m tall box standing on y = 0, 2 m wide
+  box.axis[0] = Eigen::Vector3d::UnitZ();
+  box.axis[1] = Eigen::Vector3d::UnitX();
+  box.axis[2] = -down;
+  box.half[0] = 1;
+  box.half[1] = 1;
+  box.half[2] = 5;
+  const ShadowCasters casters({box}, {}, down, to_sun);
+  // Ground at 5 m on the side away from the sun: the ray to the sun passes through the box.
+  EXPECT_FLOAT_EQ(casters.Occlusion(Eigen::Vector3d(-5, 0, 0), -1), 1.f);
+  // Beyond the shadow's tip (10 m tall at 45 degrees: 11 m), on the sunny side, and beside it: lit.
+  EXPECT_FLOAT_EQ(casters.Occlusion(Eigen::Vector3d(-12, 0, 0), -1), 0.f);
+  EXPECT_FLOAT_EQ(casters.Occlusion(Eigen::Vector3d(5, 0, 0), -1), 0.f);
+  EXPECT_FLOAT_EQ(casters.Occlusion(Eigen::Vector3d(-5, 0, 3), -1), 0.f);
+  // The surface's own caster is not tested.
+  EXPECT_FLOAT_EQ(casters.Occlusion(Eigen::Vector3d(-5, 0, 0), ShadowCasters::BoxId(0)), 0.f);
+  // Penumbra: partial occlusion right at the shadow's edge (z = 1 is the box side).
+  const float edge = casters.Occlusion(Eigen::Vector3d(-5, 0, 0.99), -1);
+  EXPECT_GT(edge, 0.f);
+  EXPECT_LT(edge, 1.f);
+}
+
+TEST(SimulatorShadows, TreeCrownShadow) {
+  const Eigen::Vector3d down = Eigen::Vector3d::UnitY();
+  ShadowEllipsoid crown;
+  crown.center = Eigen::Vector3d(0, -5, 0);
+  crown.radius_h = 2;
+  crown.radius_v = 2;
+  const ShadowCasters casters({}, {crown}, down, -down);  // sun at the zenith
+  EXPECT_NEAR(casters.Occlusion(Eigen::Vector3d(0, 0, 0), -1), crown.opacity, 1e-6);
+  EXPECT_FLOAT_EQ(casters.Occlusion(Eigen::Vector3d(3, 0, 0), -1), 0.f);
+  EXPECT_FLOAT_EQ(casters.Occlusion(Eigen::Vector3d(0, -8, 0), -1), 0.f);  // above the crown
+}
+
+}  // namespace
+}  // namespace dvso::sim
