@@ -10,11 +10,32 @@ namespace {
 // Points whose depth Hessian is below this carry no depth information this
 // iteration (all residuals out of bounds): they are left out of the Schur step.
 constexpr double kMinDepthHessian = 1e-12;
+
+// Residual sources of a host in evaluation order: every other keyframe, then
+// the host's right image, then its virtual stereo.
+std::vector<std::pair<ResidualKind, int>> ResidualSlots(const WindowGeometry& geometry, int host_index) {
+  std::vector<std::pair<ResidualKind, int>> slots;
+  for (int t = 0; t < geometry.num_frames; ++t) {
+    if (t != host_index) slots.emplace_back(ResidualKind::kTemporal, geometry.ids[t]);
+  }
+  slots.emplace_back(ResidualKind::kStaticStereo, geometry.ids[host_index]);
+  slots.emplace_back(ResidualKind::kVirtualStereo, geometry.ids[host_index]);
+  return slots;
+}
+
+Residual* FindResidual(Point* point, ResidualKind kind, int target_id) {
+  for (Residual& r : point->residuals) {
+    if (r.kind == kind && r.target_id == target_id) return &r;
+  }
+  return nullptr;
+}
+
 }  // namespace
 
 struct WindowLinearizer::Partial {
   std::vector<PairBlock> pairs;
   double energy = 0.0;
+  double comparable = 0.0;
   int active = 0;
 };
 
@@ -83,29 +104,32 @@ const ResidualGeometry* WindowGeometry::For(int h, const Residual& residual, int
   return nullptr;
 }
 
-double EvaluateWindowEnergy(std::vector<Keyframe>* keyframes, const StereoCamera& camera,
-                            const WindowOptions& options, bool update_states) {
+WindowEnergy EvaluateWindowEnergy(std::vector<Keyframe>* keyframes, const StereoCamera& camera,
+                                  const WindowOptions& options, bool write_states) {
   const WindowGeometry geometry(*keyframes, camera, options);
   const float cap = CappedResidualEnergy(options);
-  double energy = 0.0;
+  WindowEnergy energy;
   ResidualEvaluation ev;
   for (int h = 0; h < geometry.num_frames; ++h) {
-    for (Point& point : (*keyframes)[h].points) {
-      for (Residual& residual : point.residuals) {
-        if (!update_states && residual.state != ResidualState::kActive) continue;
+    for (const auto& [kind, target_id] : ResidualSlots(geometry, h)) {
+      for (Point& point : (*keyframes)[h].points) {
+        Residual* residual = FindResidual(&point, kind, target_id);
+        if (residual == nullptr) continue;
         int t = 0;
-        const ResidualGeometry* g = geometry.For(h, residual, &t);
+        const ResidualGeometry* g = geometry.For(h, *residual, &t);
         ev.state = ResidualState::kOutOfBounds;
+        ev.energy = 0.0f;
         if (g != nullptr) {
           ev.state = ResidualState::kActive;
           EvaluateResidual(*g, point, point.idepth, options, false, &ev);
         }
-        if (update_states) {
-          residual.state = ev.state;
-          residual.energy = ev.state == ResidualState::kOutOfBounds ? 0.0f : ev.energy;
-          if (ev.state == ResidualState::kActive) energy += ev.energy;
-        } else {
-          energy += ev.state == ResidualState::kOutOfBounds ? cap : std::min(ev.energy, cap);
+        if (residual->state == ResidualState::kActive) {
+          energy.comparable += ev.state == ResidualState::kOutOfBounds ? cap : std::min(ev.energy, cap);
+        }
+        if (ev.state == ResidualState::kActive) energy.active += ev.energy;
+        if (write_states) {
+          residual->state = ev.state;
+          residual->energy = ev.state == ResidualState::kOutOfBounds ? 0.0f : ev.energy;
         }
       }
     }
@@ -143,6 +167,7 @@ void WindowLinearizer::Linearize(const std::vector<PointRef>& points) {
   }
   pairs_ = std::move(partials[0].pairs);
   energy_ = partials[0].energy;
+  comparable_energy_ = partials[0].comparable;
   num_active_ = partials[0].active;
   for (int t = 1; t < threads; ++t) {
     for (size_t k = 0; k < pairs_.size(); ++k) {
@@ -150,6 +175,7 @@ void WindowLinearizer::Linearize(const std::vector<PointRef>& points) {
       pairs_[k].b += partials[t].pairs[k].b;
     }
     energy_ += partials[t].energy;
+    comparable_energy_ += partials[t].comparable;
     num_active_ += partials[t].active;
   }
   AssembleFrameBlocks();
@@ -157,48 +183,73 @@ void WindowLinearizer::Linearize(const std::vector<PointRef>& points) {
 
 void WindowLinearizer::LinearizeRange(size_t begin, size_t end, Partial* partial) {
   std::vector<Keyframe>& kfs = *keyframes_;
-  const int nfp = num_frame_params();
   ResidualEvaluation ev;
-  for (size_t i = begin; i < end; ++i) {
-    const int h = points_[i].host_index;
-    Point& point = kfs[h].points[points_[i].point_index];
-    PointBlock& block = point_blocks_[i];
-    double* cross = point_cross_.data() + i * nfp;
-    for (Residual& residual : point.residuals) {
-      int t = h;
-      const ResidualGeometry* geometry = geometry_.For(h, residual, &t);
-      if (geometry == nullptr) {
-        residual.state = ResidualState::kOutOfBounds;
-        continue;
+  // Target-major order within each host: all points of a host against one
+  // target image, then the next, so that image reads stay cache-local.
+  size_t run_begin = begin;
+  while (run_begin < end) {
+    const int h = points_[run_begin].host_index;
+    size_t run_end = run_begin;
+    while (run_end < end && points_[run_end].host_index == h) ++run_end;
+    for (const auto& [kind, target_id] : ResidualSlots(geometry_, h)) {
+      for (size_t i = run_begin; i < run_end; ++i) {
+        Point& point = kfs[h].points[points_[i].point_index];
+        Residual* residual = FindResidual(&point, kind, target_id);
+        if (residual != nullptr) ProcessResidual(i, h, &point, residual, partial, &ev);
       }
-      ev.state = ResidualState::kActive;
-      EvaluateResidual(*geometry, point, point.idepth, options_, true, &ev);
-      residual.state = ev.state;
-      residual.energy = ev.energy;
-      if (ev.state != ResidualState::kActive) continue;
-      partial->energy += ev.energy;
-      ++partial->active;
-
-      const Eigen::Matrix<float, kPatternSize, 1> wd = ev.weight.cwiseProduct(ev.J_idepth);
-      block.H_dd += wd.dot(ev.J_idepth);
-      block.b_d += wd.dot(ev.r);
-      if (!geometry->has_frame_jacobians) continue;
-
-      const Eigen::Matrix<float, kPairParams, kPatternSize> Jw = ev.J_pair.transpose() * ev.weight.asDiagonal();
-      PairBlock& pair = partial->pairs[h * num_frames_ + t];
-      pair.H.noalias() += (Jw * ev.J_pair).cast<double>();
-      pair.b.noalias() += (Jw * ev.r).cast<double>();
-      const Eigen::Matrix<double, kPairParams, 1> h_yd = (Jw * ev.J_idepth).cast<double>();
-      // Cross terms in absolute parameters: host pose through -Adj(T_th)^T.
-      Eigen::Map<Vector8d> host_cross(cross + kFrameParams * h);
-      Eigen::Map<Vector8d> target_cross(cross + kFrameParams * t);
-      host_cross.head<6>() -= geometry_.adjoint[h * num_frames_ + t].transpose() * h_yd.head<6>();
-      host_cross.tail<2>() += h_yd.segment<2>(6);
-      target_cross.head<6>() += h_yd.head<6>();
-      target_cross.tail<2>() += h_yd.segment<2>(8);
-      block.frame_mask |= (1u << h) | (1u << t);
     }
+    for (size_t i = run_begin; i < run_end; ++i) {
+      kfs[h].points[points_[i].point_index].idepth_hessian = static_cast<float>(point_blocks_[i].H_dd);
+    }
+    run_begin = run_end;
   }
+}
+
+void WindowLinearizer::ProcessResidual(size_t i, int h, Point* point_ptr, Residual* residual_ptr, Partial* partial,
+                                       ResidualEvaluation* ev_ptr) {
+  Point& point = *point_ptr;
+  Residual& residual = *residual_ptr;
+  ResidualEvaluation& ev = *ev_ptr;
+  PointBlock& block = point_blocks_[i];
+  double* cross = point_cross_.data() + i * num_frame_params();
+  int t = h;
+  const ResidualGeometry* geometry = geometry_.For(h, residual, &t);
+  const bool was_active = residual.state == ResidualState::kActive;
+  if (geometry == nullptr) {
+    residual.state = ResidualState::kOutOfBounds;
+    if (was_active) partial->comparable += CappedResidualEnergy(options_);
+    return;
+  }
+  ev.state = ResidualState::kActive;
+  EvaluateResidual(*geometry, point, point.idepth, options_, true, &ev);
+  residual.state = ev.state;
+  residual.energy = ev.state == ResidualState::kOutOfBounds ? 0.0f : ev.energy;
+  if (was_active) {
+    partial->comparable += ev.state == ResidualState::kOutOfBounds ? CappedResidualEnergy(options_)
+                                                                    : std::min(ev.energy, CappedResidualEnergy(options_));
+  }
+  if (ev.state != ResidualState::kActive) return;
+  partial->energy += ev.energy;
+  ++partial->active;
+
+  const Eigen::Matrix<float, kPatternSize, 1> wd = ev.weight.cwiseProduct(ev.J_idepth);
+  block.H_dd += wd.dot(ev.J_idepth);
+  block.b_d += wd.dot(ev.r);
+  if (!geometry->has_frame_jacobians) return;
+
+  const Eigen::Matrix<float, kPairParams, kPatternSize> Jw = ev.J_pair.transpose() * ev.weight.asDiagonal();
+  PairBlock& pair = partial->pairs[h * num_frames_ + t];
+  pair.H.noalias() += (Jw * ev.J_pair).cast<double>();
+  pair.b.noalias() += (Jw * ev.r).cast<double>();
+  const Eigen::Matrix<double, kPairParams, 1> h_yd = (Jw * ev.J_idepth).cast<double>();
+  // Cross terms in absolute parameters: host pose through -Adj(T_th)^T.
+  Eigen::Map<Vector8d> host_cross(cross + kFrameParams * h);
+  Eigen::Map<Vector8d> target_cross(cross + kFrameParams * t);
+  host_cross.head<6>() -= geometry_.adjoint[h * num_frames_ + t].transpose() * h_yd.head<6>();
+  host_cross.tail<2>() += h_yd.segment<2>(6);
+  target_cross.head<6>() += h_yd.head<6>();
+  target_cross.tail<2>() += h_yd.segment<2>(8);
+  block.frame_mask |= (1u << h) | (1u << t);
 }
 
 void WindowLinearizer::AssembleFrameBlocks() {

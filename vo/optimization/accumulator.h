@@ -49,14 +49,18 @@ struct WindowGeometry {
   std::vector<bool> has_static, has_virtual;
 };
 
-// Sum of residual energies at the current state (no Jacobians).
-// update_states = false: only residuals active at the last linearisation
-//   count, each with min(energy, cap) (out of bounds counts as the cap), so
-//   that energies before/after an LM step compare the same residual set.
-// update_states = true: every residual is evaluated and its state/energy
-//   stored; the sum is over the active ones.
-double EvaluateWindowEnergy(std::vector<Keyframe>* keyframes, const StereoCamera& camera,
-                            const WindowOptions& options, bool update_states);
+// Residual energies at the current state (no Jacobians). Every residual is
+// evaluated; `comparable` sums the residuals that were active BEFORE this
+// evaluation, each with min(energy, cap) (out of bounds counts as the cap),
+// so that energies before/after an LM step compare the same residual set;
+// `active` sums the residuals active now. With write_states the new
+// states/energies are stored in the window.
+struct WindowEnergy {
+  double comparable = 0.0;
+  double active = 0.0;
+};
+WindowEnergy EvaluateWindowEnergy(std::vector<Keyframe>* keyframes, const StereoCamera& camera,
+                                  const WindowOptions& options, bool write_states);
 
 class WindowLinearizer {
  public:
@@ -82,6 +86,9 @@ class WindowLinearizer {
 
   // Sum of the energies of the residuals active at this linearisation.
   double energy() const { return energy_; }
+  // Energy of the residuals that were active before this linearisation,
+  // capped as in EvaluateWindowEnergy (for LM step acceptance).
+  double comparable_energy() const { return comparable_energy_; }
   int num_active_residuals() const { return num_active_; }
   int num_frame_params() const { return kFrameParams * num_frames_; }
   const std::vector<PointRef>& points() const { return points_; }
@@ -99,6 +106,7 @@ class WindowLinearizer {
   struct Partial;  // per-thread accumulators
 
   void LinearizeRange(size_t begin, size_t end, Partial* partial);
+  void ProcessResidual(size_t i, int h, Point* point, Residual* residual, Partial* partial, ResidualEvaluation* ev);
   void AssembleFrameBlocks();
 
   std::vector<Keyframe>* keyframes_;
@@ -114,6 +122,7 @@ class WindowLinearizer {
   Eigen::MatrixXd H_frames_;
   Eigen::VectorXd b_frames_;
   double energy_ = 0.0;
+  double comparable_energy_ = 0.0;
   int num_active_ = 0;
 };
 

@@ -23,6 +23,7 @@ struct StateBackup {
   std::vector<Eigen::Isometry3d> poses;
   std::vector<double> a, b;
   std::vector<double> idepths;
+  std::vector<std::pair<ResidualState, float>> residual_states;
 };
 
 StateBackup Backup(const std::vector<Keyframe>& kfs, const std::vector<PointRef>& refs) {
@@ -33,6 +34,11 @@ StateBackup Backup(const std::vector<Keyframe>& kfs, const std::vector<PointRef>
     s.b.push_back(kf.b);
   }
   for (const PointRef& r : refs) s.idepths.push_back(kfs[r.host_index].points[r.point_index].idepth);
+  for (const Keyframe& kf : kfs) {
+    for (const Point& p : kf.points) {
+      for (const Residual& r : p.residuals) s.residual_states.emplace_back(r.state, r.energy);
+    }
+  }
   return s;
 }
 
@@ -43,6 +49,16 @@ void Restore(const StateBackup& s, const std::vector<PointRef>& refs, std::vecto
     (*kfs)[i].b = s.b[i];
   }
   for (size_t i = 0; i < refs.size(); ++i) (*kfs)[refs[i].host_index].points[refs[i].point_index].idepth = s.idepths[i];
+  size_t k = 0;
+  for (Keyframe& kf : *kfs) {
+    for (Point& p : kf.points) {
+      for (Residual& r : p.residuals) {
+        r.state = s.residual_states[k].first;
+        r.energy = s.residual_states[k].second;
+        ++k;
+      }
+    }
+  }
 }
 
 }  // namespace
@@ -60,6 +76,7 @@ OptimizationSummary Window::Optimize(int max_iterations) {
   double energy = linearizer->energy() + priors.energy;
   summary.initial_energy = energy;
   summary.num_active_residuals = linearizer->num_active_residuals();
+  residual_states_current_ = true;
   double lambda = options_.initial_lambda;
 
   for (int it = 0; it < max_iterations; ++it) {
@@ -82,27 +99,46 @@ OptimizationSummary Window::Optimize(int max_iterations) {
       const double rel = (p.idepth - old) / std::max(old, 1e-3);
       relative_depth_step_sq += rel * rel;
     }
-    const double trial_energy = EvaluateWindowEnergy(&keyframes_, camera_, options_, false) +
-                                EvaluateFramePriors(keyframes_, prior_H_, prior_b_).energy;
+    SyncFreeLinearizationPoints(&keyframes_);
+
+    // Evaluate the trial state. Except on the last iteration this is the
+    // next linearisation itself (residuals are evaluated once per
+    // iteration); its comparable energy decides acceptance.
+    const bool last = it + 1 == max_iterations;
+    std::unique_ptr<WindowLinearizer> trial;
+    double trial_comparable = 0.0, trial_active = 0.0;
+    if (!last) {
+      trial = std::make_unique<WindowLinearizer>(&keyframes_, camera_, options_);
+      trial->Linearize(refs);
+      trial_comparable = trial->comparable_energy();
+      trial_active = trial->energy();
+    } else {
+      const WindowEnergy e = EvaluateWindowEnergy(&keyframes_, camera_, options_, true);
+      trial_comparable = e.comparable;
+      trial_active = e.active;
+    }
+    FramePriorTerms trial_priors = EvaluateFramePriors(keyframes_, prior_H_, prior_b_);
+    const double trial_energy = trial_comparable + trial_priors.energy;
     if (!(trial_energy <= energy)) {
       Restore(backup, refs, &keyframes_);
+      SyncFreeLinearizationPoints(&keyframes_);
       lambda = std::max(lambda * 4.0, 1e-6);
       if (lambda > 1e8) break;
       continue;
     }
     ++summary.accepted_steps;
-    SyncFreeLinearizationPoints(&keyframes_);
     lambda = std::max(lambda * 0.25, 1e-9);
     const bool converged =
-        step.frames.norm() < options_.convergence_step &&
-        std::sqrt(relative_depth_step_sq / std::max<size_t>(1, refs.size())) < options_.convergence_step;
-    energy = trial_energy;
-    if (converged || it + 1 == max_iterations) break;
-    linearizer = std::make_unique<WindowLinearizer>(&keyframes_, camera_, options_);
-    linearizer->Linearize(refs);
-    priors = EvaluateFramePriors(keyframes_, prior_H_, prior_b_);
-    energy = linearizer->energy() + priors.energy;
-    summary.num_active_residuals = linearizer->num_active_residuals();
+        (step.frames.norm() < options_.convergence_step &&
+         std::sqrt(relative_depth_step_sq / std::max<size_t>(1, refs.size())) < options_.convergence_step) ||
+        energy - trial_energy < options_.min_relative_decrease * energy;
+    energy = trial_active + trial_priors.energy;
+    priors = std::move(trial_priors);
+    if (trial) {
+      linearizer = std::move(trial);
+      summary.num_active_residuals = linearizer->num_active_residuals();
+    }
+    if (converged) break;
   }
   summary.final_energy = energy;
   summary.total_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
@@ -110,7 +146,9 @@ OptimizationSummary Window::Optimize(int max_iterations) {
 }
 
 int Window::RemoveOutliers() {
-  EvaluateWindowEnergy(&keyframes_, camera_, options_, true);
+  // Optimize() leaves every residual's state evaluated at the final estimate;
+  // re-evaluate only if the window changed since.
+  if (!residual_states_current_) EvaluateWindowEnergy(&keyframes_, camera_, options_, true);
   int removed = 0;
   for (Keyframe& kf : keyframes_) {
     for (Point& p : kf.points) {

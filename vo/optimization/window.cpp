@@ -20,6 +20,7 @@ void WindowOptions::Check() const {
   Require(initial_lambda >= 0, "window: initial_lambda must be >= 0");
   Require(min_idepth > 0, "window: min_idepth must be > 0");
   Require(convergence_step > 0, "window: convergence_step must be > 0");
+  Require(min_relative_decrease >= 0, "window: min_relative_decrease must be >= 0");
   Require(min_residuals_to_marginalize >= 1, "window: min_residuals_to_marginalize must be >= 1");
   Require(num_threads >= 1 && num_threads <= 64, "window: num_threads must be in [1, 64]");
 }
@@ -30,6 +31,12 @@ Window::Window(const WindowOptions& options, const StereoCamera& camera) : optio
   Require(camera_.baseline >= 0, "window: baseline must be >= 0");
 }
 
+void Window::SetOptions(const WindowOptions& options) {
+  options.Check();
+  options_ = options;
+  residual_states_current_ = false;
+}
+
 const Keyframe* Window::FindKeyframe(int id) const {
   for (const Keyframe& kf : keyframes_) {
     if (kf.id == id) return &kf;
@@ -38,6 +45,7 @@ const Keyframe* Window::FindKeyframe(int id) const {
 }
 
 Keyframe* Window::FindMutableKeyframe(int id) {
+  residual_states_current_ = false;
   for (Keyframe& kf : keyframes_) {
     if (kf.id == id) return &kf;
   }
@@ -101,6 +109,7 @@ void Window::AddKeyframe(const KeyframeInput& input) {
     for (Point& p : host.points) p.residuals.push_back({ResidualKind::kTemporal, kf.id});
   }
   keyframes_.push_back(std::move(kf));
+  residual_states_current_ = false;
 
   // Grow the prior by an empty block.
   const int n = kFrameParams * num_keyframes();

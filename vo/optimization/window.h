@@ -52,7 +52,8 @@ struct WindowOptions {
   bool first_estimate_jacobians = true; // pose Jacobians at the keyframe's first estimate (FEJ), keeps the prior consistent
   double initial_lambda = 1e-4;         // initial Levenberg-Marquardt damping (multiplies diag(H))
   double min_idepth = 1e-5;             // inverse depths are clamped to at least this (1/m) after a step
-  double convergence_step = 1e-5;       // stop when the frame update norm falls below this
+  double convergence_step = 1e-5;       // stop when the frame update norm (and RMS relative depth update) falls below this
+  double min_relative_decrease = 1e-4;  // stop when an accepted step lowers the energy by less than this fraction
   int min_residuals_to_marginalize = 1; // hosted points with fewer good temporal residuals are dropped, not marginalised
   int num_threads = 1;                  // threads for linearisation/accumulation (1 or 2 are sensible)
 
@@ -94,6 +95,7 @@ struct Point {
   float u = 0.0f, v = 0.0f;             // host pixel (level 0)
   double idepth = 1.0;                  // inverse depth in the host camera (1/m)
   std::array<float, kPatternSize> host_intensity{};  // I_i at the pattern pixels around (u, v)
+  float idepth_hessian = 0.0f;          // H_dd over the active residuals at the last linearisation (information on d)
   std::vector<Residual> residuals;
 };
 
@@ -127,6 +129,9 @@ struct MarginalizedPoint {
   double idepth = 0.0;
   Eigen::Vector3d world;                // position in world coordinates
   int num_residuals = 0;                // good temporal residuals it had
+  float idepth_hessian = 0.0f;          // information on the inverse depth (H_dd, all active residuals)
+  float mean_energy = 0.0f;             // mean energy over its active residuals
+  float stereo_energy = -1.0f;          // energy of its static stereo residual, -1 if none / not active
 };
 
 struct OptimizationSummary {
@@ -184,6 +189,8 @@ class Window {
   int num_points() const;
   Eigen::Isometry3d CameraToWorld(int keyframe_id) const;
   const WindowOptions& options() const { return options_; }
+  // Replaces the options (checked); takes effect at the next call.
+  void SetOptions(const WindowOptions& options);
   const StereoCamera& camera() const { return camera_; }
 
   // Marginalisation prior over the active keyframes (8 parameters each,
@@ -192,7 +199,10 @@ class Window {
   const Eigen::VectorXd& prior_gradient() const { return prior_b_; }
 
   // Mutable access for the optimiser internals and tests.
-  std::vector<Keyframe>& mutable_keyframes() { return keyframes_; }
+  std::vector<Keyframe>& mutable_keyframes() {
+    residual_states_current_ = false;
+    return keyframes_;
+  }
   Keyframe* FindMutableKeyframe(int id);
 
  private:
@@ -208,6 +218,7 @@ class Window {
   Eigen::VectorXd prior_b_;  // 8N
   int next_point_id_ = 0;
   bool had_keyframe_ = false;
+  bool residual_states_current_ = false;  // residual states evaluated at the current estimate
 };
 
 }  // namespace dvso::vo

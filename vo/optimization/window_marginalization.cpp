@@ -26,6 +26,7 @@ std::vector<MarginalizedPoint> Window::MarginalizeKeyframe(int id) {
   }
   Require(index >= 0, "window: MarginalizeKeyframe: no keyframe with id " + std::to_string(id));
 
+  residual_states_current_ = false;
   // Keyframes not yet in the prior are linearised at their current estimate.
   SyncFreeLinearizationPoints(&keyframes_);
 
@@ -38,11 +39,17 @@ std::vector<MarginalizedPoint> Window::MarginalizeKeyframe(int id) {
     std::vector<PointRef> informative;
     for (const PointRef& ref : hosted) {
       const Point& p = keyframes_[index].points[ref.point_index];
-      int good = 0;
-      for (const Residual& r : p.residuals) {
-        good += r.kind == ResidualKind::kTemporal && r.state == ResidualState::kActive;
-      }
+      int good = 0, active = 0;
       MarginalizedPoint out;
+      for (const Residual& r : p.residuals) {
+        if (r.state != ResidualState::kActive) continue;
+        good += r.kind == ResidualKind::kTemporal;
+        ++active;
+        out.mean_energy += r.energy;
+        if (r.kind == ResidualKind::kStaticStereo) out.stereo_energy = r.energy;
+      }
+      if (active > 0) out.mean_energy /= active;
+      out.idepth_hessian = p.idepth_hessian;
       out.host_id = id;
       out.u = p.u;
       out.v = p.v;
