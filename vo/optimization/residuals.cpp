@@ -176,20 +176,25 @@ void EvaluateResidual(const ResidualGeometry& g, const Point& point, double idep
     out->weight[k] = w_p * huber_weight;
     const float gx = sample[1] * g.fx;  // dI/d(normalised x)
     const float gy = sample[2] * g.fy;
-    // Inverse depth (current state): d un / d d = (t_x - un t_z) / q_z.
-    out->J_idepth[k] = (gx * (g.t.x() - un * g.t.z()) + gy * (g.t.y() - vn * g.t.z())) * inv_qz;
+    // Geometric derivatives at the FEJ relative pose (== current one unless
+    // the keyframes are in the prior), image gradient at the current p~. The
+    // inverse-depth derivative uses the same pose as the pose derivatives so
+    // that the scale direction (d t invariant) stays exactly unobservable.
+    Eigen::Vector3f q0 = g.R_fej * ray + d * g.t_fej;
+    if (!(q0.z() > 1e-6f)) q0 = q;  // FEJ pose far off: fall back to the current one
+    const float inv_q0z = 1.0f / q0.z();
+    const float u0 = q0.x() * inv_q0z;
+    const float v0 = q0.y() * inv_q0z;
+    // Inverse depth: d un / d d = (t_x - un t_z) / q_z.
+    out->J_idepth[k] = (gx * (g.t_fej.x() - u0 * g.t_fej.z()) + gy * (g.t_fej.y() - v0 * g.t_fej.z())) * inv_q0z;
     if (!g.has_frame_jacobians) {
       out->J_pair.row(k).setZero();
       continue;
     }
-    // Pose (left twist of the relative pose, at the FEJ point). With
-    // X = q / d and d_t = d / q_z (inverse depth in the target):
+    // Pose (left twist of the relative pose). With X = q / d and
+    // d_t = d / q_z (inverse depth in the target):
     //  d un / d xi = [d_t, 0, -d_t un, -un vn, 1 + un^2, -vn]
     //  d vn / d xi = [0, d_t, -d_t vn, -(1 + vn^2), un vn, un]
-    const Eigen::Vector3f q0 = g.R_fej * ray + d * g.t_fej;
-    const float inv_q0z = 1.0f / q0.z();
-    const float u0 = q0.x() * inv_q0z;
-    const float v0 = q0.y() * inv_q0z;
     const float dt = d * inv_q0z;
     out->J_pair(k, 0) = gx * dt;
     out->J_pair(k, 1) = gy * dt;
