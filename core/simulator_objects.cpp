@@ -160,6 +160,18 @@ void AddCar(Placement& pl, const Vec3& base, const Vec3& forward, double length)
   roof.origin = base;
   pl.builder->AddShadowBox(base + up * 0.95 - forward * (length * 0.05), forward, cabin, width - 0.12,
                            pl.U(0.45, 0.55), glass, 1.0, pl.builder->AddSurface(roof));
+  // Lights and number plates: small boxes on the front and the back.
+  const Vec3 right = shadow.frame_right;
+  Surface lamp = Textured(kTexCarPaint, {1.f, 1.f, 0.95f}, 0.f, 0.f);
+  Surface tail = Textured(kTexCarPaint, {0.95f, 0.12f, 0.08f}, 0.f, 0.f);
+  Surface plate = Textured(kTexCurb, {1.f, 1.f, 1.f}, 0.f, 0.f);
+  for (int end = -1; end <= 1; end += 2) {
+    const Vec3 face = base + forward * (end * (length / 2 + 0.02));
+    for (int side = -1; side <= 1; side += 2)
+      pl.builder->AddBox(face + right * (side * (width / 2 - 0.22)) + up * 0.72, forward, 0.06, 0.3, 0.12,
+                         end > 0 ? lamp : tail, 0.3);
+    pl.builder->AddBox(face + up * 0.45, forward, 0.04, 0.52, 0.12, plate, 0.52);
+  }
   pl.builder->EndChunk();
   pl.scene->num_cars++;
 }

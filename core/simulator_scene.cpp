@@ -306,12 +306,15 @@ void BuildStreetSurfaces(const StreetPath& path, const SceneOptions& options, Sc
     road.frame_right = builder->down().cross(road.frame_tangent).normalized();
     road.frame_s0 = a.s;
     const StreetProfile& pa = a.profile;
-    const bool any_junction = junction[0][j] || junction[1][j] || junction[0][j + 1] || junction[1][j + 1];
+    auto junction_at = [&](int k) { return k >= 0 && k < n && (junction[0][k] || junction[1][k]); };
+    const bool any_junction = junction_at(j) || junction_at(j + 1);
+    // Zebra crossings on the 4 m of road just before and after a crossing street.
+    const bool zebra = !any_junction && (junction_at(j + 2) || junction_at(j + 3) || junction_at(j - 1) || junction_at(j - 2));
     road.overlay_a = static_cast<float>(pa.left_edge);
     road.overlay_b = static_cast<float>(pa.right_edge);
     road.overlay_flags = static_cast<uint8_t>((pa.left_edge < -4.0 && !any_junction ? 1 : 0) |
                                               (!pa.parking_left && !any_junction ? 2 : 0) |
-                                              (!pa.parking_right && !any_junction ? 4 : 0));
+                                              (!pa.parking_right && !any_junction ? 4 : 0) | (zebra ? 8 : 0));
     const int road_surface = builder->AddSurface(road);
     builder->AddQuad(at(a, a.profile.left_edge), at(a, a.profile.right_edge), at(b, b.profile.right_edge),
                      at(b, b.profile.left_edge), up, road_surface);

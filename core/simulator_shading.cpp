@@ -60,6 +60,11 @@ Eigen::Vector3f Shader::Surface(const Triangle& triangle, const Eigen::Vector3d&
       }
       if (s.overlay_flags & 2) paint = std::max(paint, BandCoverage(lateral, fl, s.overlay_a + 0.3, s.overlay_a + 0.45));
       if (s.overlay_flags & 4) paint = std::max(paint, BandCoverage(lateral, fl, s.overlay_b - 0.45, s.overlay_b - 0.3));
+      if ((s.overlay_flags & 8) && lateral > s.overlay_a + 0.3 && lateral < s.overlay_b - 0.3) {
+        // Zebra stripes 0.5 m wide every metre, parallel to the driving direction.
+        const double phase = lateral - std::floor(lateral);
+        paint = std::max(paint, std::max(BandCoverage(phase, fl, 0.25, 0.75), 0.f));
+      }
       if (paint > 0) albedo += paint * (0.55f + 0.6f * (albedo - 0.36f) - albedo);
       break;
     }
