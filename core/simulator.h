@@ -41,6 +41,7 @@ struct SimulatorOptions {
   bool noise = true;                // additive Gaussian sensor noise
   double noise_sigma = 1.5;         // noise std (grey levels)
   bool color = false;               // also render image_2/ image_3/ (colour)
+  bool edge_antialiasing = true;    // 4 extra samples on silhouette / crease pixels
   int num_threads = 2;              // render threads
   int texture_size = 512;           // procedural texture resolution (power of two)
 

@@ -42,11 +42,30 @@ inline float GaussFromBits(uint64_t bits) {
 
 inline uint8_t Quantise(float v) { return static_cast<uint8_t>(std::clamp(v + 0.5f, 0.f, 255.f)); }
 
+// Runs work(tile) for tiles 0..num_tiles-1 on num_threads threads (the
+// caller's included); tiles are taken from a shared counter.
+template <typename Work>
+void ParallelTiles(int num_tiles, int num_threads, const Work& work) {
+  std::atomic<int> next{0};
+  auto worker = [&]() {
+    for (int tile = next++; tile < num_tiles; tile = next++) work(tile);
+  };
+  std::vector<std::thread> threads;
+  for (int t = 1; t < num_threads; ++t) threads.emplace_back(worker);
+  worker();
+  for (auto& t : threads) t.join();
+}
+
 }  // namespace
 
 Renderer::Renderer(const Scene& scene, const TextureBank& textures, const PinholeCamera& camera, int num_threads,
-                   double max_distance)
-    : scene_(scene), shader_(scene, textures), camera_(camera), num_threads_(num_threads), max_distance_(max_distance) {
+                   double max_distance, bool edge_antialiasing)
+    : scene_(scene),
+      shader_(scene, textures),
+      camera_(camera),
+      num_threads_(num_threads),
+      max_distance_(max_distance),
+      edge_antialiasing_(edge_antialiasing) {
   camera_.Check();
   Require(num_threads >= 1, "number of render threads must be >= 1");
   Require(max_distance > 1.0, "render distance must be > 1 m");
@@ -162,112 +181,164 @@ RenderedView Renderer::Render(const Eigen::Isometry3d& T_world_camera, const Pho
   const double pixel_angle = 1.0 / std::max(fx, fy);
   const float scale = static_cast<float>(255.0 * photometric.gain);
 
-  // ---- 2. Per tile: visibility buffer, then shade every pixel once.
-  std::atomic<int> next_tile{0};
-  auto worker = [&]() {
-    std::vector<float> zbuf(static_cast<size_t>(kTileRows) * width);
-    std::vector<int> ids(static_cast<size_t>(kTileRows) * width);
-    for (int tile = next_tile++; tile < num_tiles; tile = next_tile++) {
-      const int row0 = tile * kTileRows, row1 = std::min(height, row0 + kTileRows);
-      std::fill(zbuf.begin(), zbuf.end(), min_inverse_depth);
-      std::fill(ids.begin(), ids.end(), -1);
-      for (int i : bins[tile]) {
-        const ScreenTriangle& st = screen[i];
-        for (int y = std::max(row0, st.y0); y <= std::min(row1 - 1, st.y1); ++y) {
-          // Span of the row from the three edges. Pixels more than one pixel
-          // inside the span are inside for sure; only the few pixels near its
-          // ends need the exact (tie-breaking) edge test.
-          double lo = st.x0, hi = st.x1;
-          double span_lo = -1e300, span_hi = 1e300;
-          bool empty = false;
-          for (int e = 0; e < 3; ++e) {
-            const double k = st.eb[e] * y + st.ec[e];
-            if (st.ea[e] > 0) {
-              span_lo = std::max(span_lo, -k / st.ea[e]);
-            } else if (st.ea[e] < 0) {
-              span_hi = std::min(span_hi, -k / st.ea[e]);
-            } else if (k < 0 || (k == 0 && !st.include_zero[e])) {
-              empty = true;  // the row lies outside a horizontal edge
-            }
-          }
-          if (empty) continue;
-          lo = std::max(lo, std::floor(std::max(span_lo, -1e9)) - 1);
-          hi = std::min(hi, std::ceil(std::min(span_hi, 1e9)) + 1);
-          if (lo > hi) continue;
-          const double sure_lo = span_lo + 1.0, sure_hi = span_hi - 1.0;
-          float* zrow = &zbuf[static_cast<size_t>(y - row0) * width];
-          int* idrow = &ids[static_cast<size_t>(y - row0) * width];
-          const double iz_row = st.iq * y + st.ir;
-          for (int x = static_cast<int>(lo); x <= static_cast<int>(hi); ++x) {
-            if (x <= sure_lo || x >= sure_hi) {
-              bool inside = true;
-              for (int e = 0; e < 3 && inside; ++e) {
-                const double val = st.ea[e] * x + st.eb[e] * y + st.ec[e];
-                inside = val > 0 || (val == 0 && st.include_zero[e]);
-              }
-              if (!inside) continue;
-            }
-            const float iz = static_cast<float>(st.ip * x + iz_row);
-            if (iz > zrow[x]) {
-              zrow[x] = iz;
-              idrow[x] = i;
-            }
+  // ---- 2. Visibility buffer (nearest triangle per pixel), tiles in parallel.
+  std::vector<float> zbuf(static_cast<size_t>(width) * height, min_inverse_depth);
+  std::vector<int> ids(static_cast<size_t>(width) * height, -1);
+  ParallelTiles(num_tiles, num_threads_, [&](int tile) {
+    const int row0 = tile * kTileRows, row1 = std::min(height, row0 + kTileRows);
+    for (int i : bins[tile]) {
+      const ScreenTriangle& st = screen[i];
+      for (int y = std::max(row0, st.y0); y <= std::min(row1 - 1, st.y1); ++y) {
+        // Span of the row from the three edges. Pixels more than one pixel
+        // inside the span are inside for sure; only the few pixels near its
+        // ends need the exact (tie-breaking) edge test.
+        double lo = st.x0, hi = st.x1;
+        double span_lo = -1e300, span_hi = 1e300;
+        bool empty = false;
+        for (int e = 0; e < 3; ++e) {
+          const double k = st.eb[e] * y + st.ec[e];
+          if (st.ea[e] > 0) {
+            span_lo = std::max(span_lo, -k / st.ea[e]);
+          } else if (st.ea[e] < 0) {
+            span_hi = std::min(span_hi, -k / st.ea[e]);
+          } else if (k < 0 || (k == 0 && !st.include_zero[e])) {
+            empty = true;  // the row lies outside a horizontal edge
           }
         }
-      }
-      for (int y = row0; y < row1; ++y) {
-        const int* idrow = &ids[static_cast<size_t>(y - row0) * width];
-        uint8_t* grey = out.grey.ptr<uint8_t>(y);
-        float* depth = out.depth.ptr<float>(y);
-        uint8_t* color = with_color ? out.color.ptr<uint8_t>(y) : nullptr;
-        const double yn = (y - cy) / fy;
-        for (int x = 0; x < width; ++x) {
-          const double xn = (x - cx) / fx;
-          const Eigen::Vector3d ray = R.col(0) * xn + R.col(1) * yn + R.col(2);  // world, camera z = 1
-          Eigen::Vector3f radiance;
-          if (idrow[x] < 0) {
-            radiance = shader_.Sky(ray.normalized(), pixel_angle);
-            depth[x] = 0.f;
-          } else {
-            const ScreenTriangle& st = screen[idrow[x]];
-            const Triangle& tri = scene_.triangles[st.triangle];
-            const double n_ray = tri.normal.dot(ray);
-            const double z = (tri.offset - tri.normal.dot(C)) / n_ray;  // exact depth of the plane hit
-            const Eigen::Vector3d point = C + z * ray;
-            // Hit point displacement per pixel (ray differentials on the plane).
-            const Eigen::Vector3d rx = R.col(0) / fx, ry = R.col(1) / fy;
-            const Eigen::Vector3d dPdx = z * (rx - ray * (tri.normal.dot(rx) / n_ray));
-            const Eigen::Vector3d dPdy = z * (ry - ray * (tri.normal.dot(ry) / n_ray));
-            radiance = shader_.Surface(tri, point, dPdx, dPdy);
-            depth[x] = static_cast<float>(z);
-          }
-          // Camera: exposure gain/bias, vignetting, noise, 8-bit quantisation.
-          const double r2 = (x - cx) * (x - cx) + (y - cy) * (y - cy);
-          const float vignette = static_cast<float>(std::max(0.0, 1.0 - photometric.vignetting_strength * r2 / half_diagonal_sq));
-          const float k = scale * vignette;
-          const float bias = static_cast<float>(photometric.bias);
-          const float lum = 0.299f * radiance.x() + 0.587f * radiance.y() + 0.114f * radiance.z();
-          const uint64_t pixel_key = photometric.noise_seed ^ (static_cast<uint64_t>(y) << 32 | static_cast<uint32_t>(x));
-          float noise = 0.f;
-          if (photometric.noise_sigma > 0)
-            noise = static_cast<float>(photometric.noise_sigma) * GaussFromBits(Mix(pixel_key));
-          grey[x] = Quantise(k * lum + bias + noise);
-          if (color) {
-            for (int ch = 0; ch < 3; ++ch) {
-              float cn = 0.f;
-              if (photometric.noise_sigma > 0)
-                cn = static_cast<float>(photometric.noise_sigma) * GaussFromBits(Mix(pixel_key + 0x1234567ull * (ch + 1)));
-              color[3 * x + (2 - ch)] = Quantise(k * radiance[ch] + bias + cn);  // BGR
+        if (empty) continue;
+        lo = std::max(lo, std::floor(std::max(span_lo, -1e9)) - 1);
+        hi = std::min(hi, std::ceil(std::min(span_hi, 1e9)) + 1);
+        if (lo > hi) continue;
+        const double sure_lo = span_lo + 1.0, sure_hi = span_hi - 1.0;
+        float* zrow = &zbuf[static_cast<size_t>(y) * width];
+        int* idrow = &ids[static_cast<size_t>(y) * width];
+        const double iz_row = st.iq * y + st.ir;
+        for (int x = static_cast<int>(lo); x <= static_cast<int>(hi); ++x) {
+          if (x <= sure_lo || x >= sure_hi) {
+            bool inside = true;
+            for (int e = 0; e < 3 && inside; ++e) {
+              const double val = st.ea[e] * x + st.eb[e] * y + st.ec[e];
+              inside = val > 0 || (val == 0 && st.include_zero[e]);
             }
+            if (!inside) continue;
+          }
+          const float iz = static_cast<float>(st.ip * x + iz_row);
+          if (iz > zrow[x]) {
+            zrow[x] = iz;
+            idrow[x] = i;
           }
         }
       }
     }
+  });
+
+  // ---- 3. Shading: each visible pixel once at its centre; pixels on a
+  // depth or crease edge get 4 extra sub-samples (rotated grid) whose
+  // radiance is averaged, so silhouettes are anti-aliased. GT depth stays
+  // the exact value at the pixel centre.
+  const Eigen::Vector3d rx = R.col(0) / fx, ry = R.col(1) / fy;
+  // Radiance seen at image position (px, py) on screen triangle `id` (-1 = sky); z = depth.
+  auto shade = [&](double px, double py, int id, double* z_out) -> Eigen::Vector3f {
+    const Eigen::Vector3d ray = R.col(0) * ((px - cx) / fx) + R.col(1) * ((py - cy) / fy) + R.col(2);  // camera z = 1
+    if (id < 0) {
+      *z_out = 0;
+      return shader_.Sky(ray.normalized(), pixel_angle);
+    }
+    const Triangle& tri = scene_.triangles[screen[id].triangle];
+    const double n_ray = tri.normal.dot(ray);
+    const double z = (tri.offset - tri.normal.dot(C)) / n_ray;  // exact depth of the plane hit
+    // Hit point displacement per pixel (ray differentials on the plane).
+    const Eigen::Vector3d dPdx = z * (rx - ray * (tri.normal.dot(rx) / n_ray));
+    const Eigen::Vector3d dPdy = z * (ry - ray * (tri.normal.dot(ry) / n_ray));
+    *z_out = z;
+    return shader_.Surface(tri, C + z * ray, dPdx, dPdy);
   };
-  std::vector<std::thread> threads;
-  for (int t = 1; t < num_threads_; ++t) threads.emplace_back(worker);
-  worker();
-  for (auto& t : threads) t.join();
+  auto is_edge = [&](int x, int y) {
+    const int a = ids[static_cast<size_t>(y) * width + x];
+    const float za = zbuf[static_cast<size_t>(y) * width + x];
+    const int nx[4] = {x - 1, x + 1, x, x};
+    const int ny[4] = {y, y, y - 1, y + 1};
+    for (int k = 0; k < 4; ++k) {
+      if (nx[k] < 0 || ny[k] < 0 || nx[k] >= width || ny[k] >= height) continue;
+      const int b = ids[static_cast<size_t>(ny[k]) * width + nx[k]];
+      if (a == b) continue;
+      if ((a < 0) != (b < 0)) return true;
+      // Different planes meeting here (not the continuation of one surface)?
+      const ScreenTriangle& sb = screen[b];
+      const double iz_b = sb.ip * x + sb.iq * y + sb.ir;
+      if (std::abs(iz_b - za) > 0.005 * za) return true;
+      const Triangle& ta = scene_.triangles[screen[a].triangle];
+      const Triangle& tb = scene_.triangles[sb.triangle];
+      const bool flat = scene_.surfaces[ta.surface].normal_mode == NormalMode::kFlat &&
+                        scene_.surfaces[tb.surface].normal_mode == NormalMode::kFlat;
+      if (flat && ta.normal.dot(tb.normal) < 0.98) return true;  // a crease (building corner)
+    }
+    return false;
+  };
+  ParallelTiles(num_tiles, num_threads_, [&](int tile) {
+    const int row0 = tile * kTileRows, row1 = std::min(height, row0 + kTileRows);
+    for (int y = row0; y < row1; ++y) {
+      const int* idrow = &ids[static_cast<size_t>(y) * width];
+      uint8_t* grey = out.grey.ptr<uint8_t>(y);
+      float* depth = out.depth.ptr<float>(y);
+      uint8_t* color = with_color ? out.color.ptr<uint8_t>(y) : nullptr;
+      for (int x = 0; x < width; ++x) {
+        double z = 0;
+        Eigen::Vector3f radiance = shade(x, y, idrow[x], &z);
+        depth[x] = static_cast<float>(z);
+        if (edge_antialiasing_ && is_edge(x, y)) {
+          // Candidate triangles: those visible in the 3x3 neighbourhood.
+          int candidates[9], count = 0;
+          for (int dy = -1; dy <= 1; ++dy)
+            for (int dx = -1; dx <= 1; ++dx) {
+              const int xx = x + dx, yy = y + dy;
+              if (xx < 0 || yy < 0 || xx >= width || yy >= height) continue;
+              const int id = ids[static_cast<size_t>(yy) * width + xx];
+              if (id >= 0 && std::find(candidates, candidates + count, id) == candidates + count) candidates[count++] = id;
+            }
+          static const double kOffsets[4][2] = {{-0.125, -0.375}, {0.375, -0.125}, {0.125, 0.375}, {-0.375, 0.125}};
+          Eigen::Vector3f sum = radiance;
+          for (const auto& o : kOffsets) {
+            const double sx = x + o[0], sy = y + o[1];
+            int best = -1;
+            double best_iz = min_inverse_depth;
+            for (int c = 0; c < count; ++c) {
+              const ScreenTriangle& st = screen[candidates[c]];
+              bool inside = true;
+              for (int e = 0; e < 3 && inside; ++e) inside = st.ea[e] * sx + st.eb[e] * sy + st.ec[e] >= 0;
+              const double iz = st.ip * sx + st.iq * sy + st.ir;
+              if (inside && iz > best_iz) {
+                best_iz = iz;
+                best = candidates[c];
+              }
+            }
+            double unused = 0;
+            sum += shade(sx, sy, best, &unused);
+          }
+          radiance = sum / 5.f;  // centre + 4 sub-samples
+        }
+        // Camera: exposure gain/bias, vignetting, noise, 8-bit quantisation.
+        const double r2 = (x - cx) * (x - cx) + (y - cy) * (y - cy);
+        const float vignette = static_cast<float>(std::max(0.0, 1.0 - photometric.vignetting_strength * r2 / half_diagonal_sq));
+        const float k = scale * vignette;
+        const float bias = static_cast<float>(photometric.bias);
+        const float lum = 0.299f * radiance.x() + 0.587f * radiance.y() + 0.114f * radiance.z();
+        const uint64_t pixel_key = photometric.noise_seed ^ (static_cast<uint64_t>(y) << 32 | static_cast<uint32_t>(x));
+        float noise = 0.f;
+        if (photometric.noise_sigma > 0)
+          noise = static_cast<float>(photometric.noise_sigma) * GaussFromBits(Mix(pixel_key));
+        grey[x] = Quantise(k * lum + bias + noise);
+        if (color) {
+          for (int ch = 0; ch < 3; ++ch) {
+            float cn = 0.f;
+            if (photometric.noise_sigma > 0)
+              cn = static_cast<float>(photometric.noise_sigma) * GaussFromBits(Mix(pixel_key + 0x1234567ull * (ch + 1)));
+            color[3 * x + (2 - ch)] = Quantise(k * radiance[ch] + bias + cn);  // BGR
+          }
+        }
+      }
+    }
+  });
   return out;
 }
 

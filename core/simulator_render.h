@@ -4,6 +4,7 @@
 // is shaded once: exact ray-plane hit -> filtered texture lookups with
 // analytic pixel footprints (anti-aliasing) -> Lambertian light that does not
 // depend on the viewpoint -> camera model (exposure, vignetting, noise).
+// Pixels on silhouettes and creases get 4 extra sub-samples (edge AA).
 #pragma once
 
 #include <Eigen/Geometry>
@@ -51,8 +52,9 @@ class Shader {
 class Renderer {
  public:
   // max_distance: geometry farther than this (m, along the optical axis) is not drawn.
+  // edge_antialiasing: 4 extra samples on pixels at depth edges and creases.
   Renderer(const Scene& scene, const TextureBank& textures, const PinholeCamera& camera, int num_threads,
-           double max_distance);
+           double max_distance, bool edge_antialiasing = true);
 
   // Renders the view of a camera at T_world_camera (camera-to-world, camera y down).
   RenderedView Render(const Eigen::Isometry3d& T_world_camera, const Photometric& photometric,
@@ -64,6 +66,7 @@ class Renderer {
   PinholeCamera camera_;
   int num_threads_;
   double max_distance_;
+  bool edge_antialiasing_;
 };
 
 }  // namespace dvso::sim

@@ -63,7 +63,8 @@ void WriteSimulationYaml(const std::string& path, const StreetSimulator& simulat
     out << "vignetting: " << (o.vignetting ? "true" : "false") << "\nvignetting_strength: " << o.vignetting_strength
         << "\n";
     out << "noise: " << (o.noise ? "true" : "false") << "\nnoise_sigma: " << o.noise_sigma << "\n";
-    out << "color: " << (o.color ? "true" : "false") << "\n";
+    out << "color: " << (o.color ? "true" : "false") << "\nedge_antialiasing: " << (o.edge_antialiasing ? "true" : "false")
+        << "\n";
     out << "building_density: " << o.scene.building_density << "\ncar_density: " << o.scene.car_density
         << "\ntree_density: " << o.scene.tree_density << "\nshadows: " << (o.scene.shadows ? "true" : "false") << "\n";
     out << "world: {triangles: " << scene.triangles.size() << ", buildings: " << scene.num_buildings

@@ -15,7 +15,8 @@ struct SimulateArgs {
   std::string output_dir;
   int width = 0, height = 0;  // 0 = KITTI size
   double fx = 0, fy = 0, cx = -1, cy = -1, baseline = 0;  // 0 / -1 = KITTI (scaled with the size)
-  bool no_exposure = false, no_vignetting = false, no_noise = false, no_shadows = false, quiet = false;
+  bool no_exposure = false, no_vignetting = false, no_noise = false, no_shadows = false, no_edge_aa = false,
+       quiet = false;
   SimulatorOptions options;
 };
 
@@ -36,6 +37,7 @@ void Run(SimulateArgs& args) {
   o.vignetting = !args.no_vignetting;
   o.noise = !args.no_noise;
   o.scene.shadows = !args.no_shadows;
+  o.edge_antialiasing = !args.no_edge_aa;
   o.Check();
   const auto& c = o.camera.left;
   std::cout << "output      : " << args.output_dir << "\n"
@@ -88,6 +90,7 @@ void AddSimulateCommand(CLI::App& app) {
   cmd->add_option("--noise-sigma", o.noise_sigma, "sensor noise std (grey levels)")->capture_default_str();
   cmd->add_flag("--color", o.color, "also write colour images image_2/ image_3/");
   cmd->add_flag("--no-shadows", args->no_shadows, "no cast sun shadows");
+  cmd->add_flag("--no-edge-aa", args->no_edge_aa, "no extra samples on silhouette pixels (faster, aliased edges)");
   cmd->add_option("--building-density", o.scene.building_density, "fraction of the street lined by buildings")
       ->capture_default_str();
   cmd->add_option("--car-density", o.scene.car_density, "fraction of parking lanes with cars")->capture_default_str();
