@@ -233,7 +233,8 @@ TrackingResult CoarseTracker::TrackWithHypotheses(const ImagePyramid& frame,
     ++tried;
     const bool better = r.success && (!best.success || r.rmse < best.rmse);
     if (better) best = r;
-    if (best.success && (reference_rmse <= 0 || best.rmse < options_.retrack_ratio * reference_rmse)) break;
+    // Without a reference rmse (first frame of a map) every hypothesis is tried.
+    if (best.success && reference_rmse > 0 && best.rmse < options_.retrack_ratio * reference_rmse) break;
   }
   best.hypotheses_tried = tried;
   return best;

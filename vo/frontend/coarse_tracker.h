@@ -82,8 +82,8 @@ class CoarseTracker {
                        double b_guess = 0, int max_level = -1) const;
 
   // Tries `guesses` in order and returns the best; stops early when a result's
-  // rmse is below retrack_ratio * reference_rmse (reference_rmse <= 0: take the
-  // first successful one).
+  // rmse is below retrack_ratio * reference_rmse (reference_rmse <= 0, e.g. the
+  // first frame of a new map: tries them all).
   TrackingResult TrackWithHypotheses(const ImagePyramid& frame, const std::vector<Eigen::Isometry3d>& guesses,
                                      double a_guess, double b_guess, double reference_rmse) const;
 

@@ -32,6 +32,8 @@ struct FrameEvent {
   int segment = 0;             // increments at every (re-)initialisation after a loss
   double tracking_rmse = 0;
   int hypotheses_tried = 0;
+  double keyframe_score = 0;   // DSO flow/affine score (> 1 = keyframe), 0 when not tracked
+  double rmse_ratio = 0;       // tracking rmse / first rmse after the reference (> growth factor = keyframe)
   double track_ms = 0;         // pyramid + tracking
   double total_ms = 0;         // everything for this frame (incl. keyframe work)
   double optimize_ms = 0;      // windowed optimisation (keyframes only)
@@ -47,6 +49,9 @@ struct PointInfo {
   Eigen::Vector3d world = Eigen::Vector3d::Zero();
   int num_good_residuals = 0;  // temporal residuals in the active state at the last evaluation
   int num_residuals = 0;       // all residuals (incl. stereo kinds)
+  float idepth_hessian = 0;    // information on the inverse depth (H_dd over active residuals)
+  float mean_energy = 0;       // mean energy over its active residuals at the last evaluation
+  float stereo_energy = -1;    // energy of its static stereo residual, -1 if none / not active
 };
 
 struct KeyframeInfo {

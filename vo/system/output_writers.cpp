@@ -58,14 +58,15 @@ int TrajectoryRecorder::CountStatus(FrameStatus status) const {
 RunLogWriter::RunLogWriter(const std::string& csv_path) : path_(csv_path), out_(csv_path) {
   RequireFile(out_.good(), csv_path, "cannot write run log");
   out_ << "frame,timestamp,status,segment,reference,track_ms,optimize_ms,total_ms,rmse,hypotheses,"
-          "window_keyframes,active_points,immature_points\n";
+          "window_keyframes,active_points,immature_points,keyframe_score,rmse_ratio\n";
 }
 
 void RunLogWriter::OnFrameTracked(const FrameEvent& e) {
   out_ << e.frame_index << ',' << std::setprecision(15) << e.timestamp << ',' << ToString(e.status) << ','
        << e.segment << ',' << e.reference_frame_index << ',' << std::setprecision(6) << e.track_ms << ','
        << e.optimize_ms << ',' << e.total_ms << ',' << e.tracking_rmse << ',' << e.hypotheses_tried << ','
-       << e.window_keyframes << ',' << e.active_points << ',' << e.immature_points << '\n';
+       << e.window_keyframes << ',' << e.active_points << ',' << e.immature_points << ',' << e.keyframe_score << ','
+       << e.rmse_ratio << '\n';
 }
 
 void RunLogWriter::OnFinished() {

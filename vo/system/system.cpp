@@ -157,6 +157,8 @@ void System::TrackFrame(int frame_index, const ImagePyramidPtr& pyr, const cv::M
   decision.image_height = camera_.left.height;
   decision.first_rmse = first_rmse_;
   decision.frames_since_keyframe = frames_since_keyframe_;
+  ev->keyframe_score = KeyframeScore(decision, options_.keyframe);
+  ev->rmse_ratio = first_rmse_ > 0 ? result.rmse / first_rmse_ : 0;
   if (NeedKeyframe(decision, options_.keyframe)) {
     MakeKeyframe(frame_index, pyr, right, T_new_cw, a_new, b_new, ev);
     ev->status = FrameStatus::kKeyframe;

@@ -165,9 +165,17 @@ PointInfo System::MakePointInfo(const Keyframe& host, const Point& point) const 
   info.idepth = point.idepth;
   info.world = host.world_to_camera.inverse() * (camera_.left.Unproject(point.u, point.v) / point.idepth);
   info.num_residuals = static_cast<int>(point.residuals.size());
+  info.idepth_hessian = point.idepth_hessian;
+  int active = 0;
+  double energy = 0;
   for (const Residual& r : point.residuals) {
-    if (r.kind == ResidualKind::kTemporal && r.state == ResidualState::kActive) ++info.num_good_residuals;
+    if (r.state != ResidualState::kActive) continue;
+    ++active;
+    energy += r.energy;
+    if (r.kind == ResidualKind::kTemporal) ++info.num_good_residuals;
+    if (r.kind == ResidualKind::kStaticStereo) info.stereo_energy = r.energy;
   }
+  info.mean_energy = active > 0 ? static_cast<float>(energy / active) : 0.f;
   return info;
 }
 
@@ -189,6 +197,9 @@ void System::MarginalizeKeyframes() {
         p.world = m.world;
         p.num_good_residuals = m.num_residuals;
         p.num_residuals = m.num_residuals;
+        p.idepth_hessian = m.idepth_hessian;
+        p.mean_energy = m.mean_energy;
+        p.stereo_energy = m.stereo_energy;
         points.push_back(p);
       }
       for (OdometryObserver* o : observers_) o->OnPointsMarginalized(points);
@@ -221,7 +232,7 @@ void System::SetTrackingReference(int keyframe_id) {
   reference_id_ = keyframe_id;
   T_last_ref_ = Eigen::Isometry3d::Identity();
   last_a_ = last_b_ = 0;
-  first_rmse_ = last_rmse_ = 0;
+  first_rmse_ = 0;  // last_rmse_ is kept: residual levels are comparable across references
   frames_since_keyframe_ = 0;
 }
 
