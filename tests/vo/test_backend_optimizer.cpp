@@ -81,8 +81,8 @@ TEST(BackendOptimizer, MonoConvergesUpToScale) {
   EXPECT_LT(after.max_translation, 0.015);
   EXPECT_LT(after.max_rotation, 0.002);
   EXPECT_LT(after.median_idepth_rel, 0.03);
-  // The first keyframe (gauge prior) does not move.
-  EXPECT_LT((sw.window->keyframe(0).world_to_camera.matrix() - sw.true_world_to_camera[0].matrix()).norm(), 1e-6);
+  // The first keyframe (gauge prior, weight 1e8) moves only negligibly.
+  EXPECT_LT((sw.window->keyframe(0).world_to_camera.matrix() - sw.true_world_to_camera[0].matrix()).norm(), 1e-4);
 }
 
 TEST(BackendOptimizer, StaticStereoFixesMetricScale) {

@@ -10,6 +10,8 @@ namespace {
 // Points whose depth Hessian is below this carry no depth information this
 // iteration (all residuals out of bounds): they are left out of the Schur step.
 constexpr double kMinDepthHessian = 1e-12;
+// Points ahead whose target-image rows are prefetched.
+constexpr size_t kPrefetchDistance = 2;
 
 // Residual sources of a host in evaluation order: every other keyframe, then
 // the host's right image, then its virtual stereo.
@@ -111,8 +113,18 @@ WindowEnergy EvaluateWindowEnergy(std::vector<Keyframe>* keyframes, const Stereo
   WindowEnergy energy;
   ResidualEvaluation ev;
   for (int h = 0; h < geometry.num_frames; ++h) {
+    std::vector<Point>& points = (*keyframes)[h].points;
     for (const auto& [kind, target_id] : ResidualSlots(geometry, h)) {
-      for (Point& point : (*keyframes)[h].points) {
+      Residual probe;
+      probe.kind = kind;
+      probe.target_id = target_id;
+      int unused = 0;
+      const ResidualGeometry* slot_geometry = geometry.For(h, probe, &unused);
+      for (size_t i = 0; i < points.size(); ++i) {
+        if (slot_geometry != nullptr && i + kPrefetchDistance < points.size()) {
+          PrefetchResidual(*slot_geometry, points[i + kPrefetchDistance], points[i + kPrefetchDistance].idepth);
+        }
+        Point& point = points[i];
         Residual* residual = FindResidual(&point, kind, target_id);
         if (residual == nullptr) continue;
         int t = 0;
@@ -192,7 +204,19 @@ void WindowLinearizer::LinearizeRange(size_t begin, size_t end, Partial* partial
     size_t run_end = run_begin;
     while (run_end < end && points_[run_end].host_index == h) ++run_end;
     for (const auto& [kind, target_id] : ResidualSlots(geometry_, h)) {
+      const ResidualGeometry* slot_geometry = nullptr;
+      {
+        Residual probe;
+        probe.kind = kind;
+        probe.target_id = target_id;
+        int unused = 0;
+        slot_geometry = geometry_.For(h, probe, &unused);
+      }
       for (size_t i = run_begin; i < run_end; ++i) {
+        if (slot_geometry != nullptr && i + kPrefetchDistance < run_end) {
+          const Point& ahead = kfs[h].points[points_[i + kPrefetchDistance].point_index];
+          PrefetchResidual(*slot_geometry, ahead, ahead.idepth);
+        }
         Point& point = kfs[h].points[points_[i].point_index];
         Residual* residual = FindResidual(&point, kind, target_id);
         if (residual != nullptr) ProcessResidual(i, h, &point, residual, partial, &ev);
@@ -239,7 +263,7 @@ void WindowLinearizer::ProcessResidual(size_t i, int h, Point* point_ptr, Residu
 
   const Eigen::Matrix<float, kPairParams, kPatternSize> Jw = ev.J_pair.transpose() * ev.weight.asDiagonal();
   PairBlock& pair = partial->pairs[h * num_frames_ + t];
-  pair.H.noalias() += (Jw * ev.J_pair).cast<double>();
+  pair.H.noalias() += Jw.lazyProduct(ev.J_pair).cast<double>();
   pair.b.noalias() += (Jw * ev.r).cast<double>();
   const Eigen::Matrix<double, kPairParams, 1> h_yd = (Jw * ev.J_idepth).cast<double>();
   // Cross terms in absolute parameters: host pose through -Adj(T_th)^T.

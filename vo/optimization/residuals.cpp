@@ -133,6 +133,28 @@ ResidualGeometry VirtualStereoGeometry(const Keyframe& host, const PinholeCamera
   return g;
 }
 
+void PrefetchResidual(const ResidualGeometry& g, const Point& point, double idepth) {
+  float x = point.u, y = point.v;
+  const float d = static_cast<float>(idepth);
+  if (g.kind == ResidualKind::kVirtualStereo) {
+    x -= g.fx * g.baseline * d;  // D^R read; the image read is near it after the disparity shift
+  } else {
+    const Eigen::Vector3f q = g.R * Eigen::Vector3f((x - g.cx) / g.fx, (y - g.cy) / g.fy, 1.0f) + d * g.t;
+    if (!(q.z() > 1e-6f)) return;
+    x = g.fx * q.x() / q.z() + g.cx;
+    y = g.fy * q.y() / q.z() + g.cy;
+  }
+  const PyramidLevel& level = *g.target;
+  if (!level.InBounds(x, y, kPatternRadius + 2.0f)) return;
+  const int ix = static_cast<int>(x) - kPatternRadius;
+  const int iy = static_cast<int>(y) - kPatternRadius;
+  for (int r = 0; r <= 2 * kPatternRadius + 1; ++r) {
+    const Eigen::Vector3f* row = level.data.data() + static_cast<size_t>(iy + r) * level.width + ix;
+    __builtin_prefetch(row);
+    __builtin_prefetch(row + 2 * kPatternRadius + 1);
+  }
+}
+
 void EvaluateResidual(const ResidualGeometry& g, const Point& point, double idepth, const WindowOptions& options,
                       bool with_jacobians, ResidualEvaluation* out) {
   if (g.kind == ResidualKind::kVirtualStereo) {

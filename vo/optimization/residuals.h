@@ -77,6 +77,11 @@ ResidualGeometry VirtualStereoGeometry(const Keyframe& host, const PinholeCamera
 void EvaluateResidual(const ResidualGeometry& geometry, const Point& point, double idepth,
                       const WindowOptions& options, bool with_jacobians, ResidualEvaluation* out);
 
+// Hints the cache about the target-image rows the residual of `point` will
+// read (its projected pattern), so that the next residual's image reads
+// overlap with the current one's arithmetic. No effect on results.
+void PrefetchResidual(const ResidualGeometry& geometry, const Point& point, double idepth);
+
 // Energy that an out-of-bounds/outlier residual counts with when comparing
 // energies across an LM step (so that leaving the image is not "free").
 inline float CappedResidualEnergy(const WindowOptions& options) {
