@@ -178,3 +178,50 @@ TEST(BackendMarginalization, FirstEstimateJacobiansKeepPriorConsistent) {
 
 }  // namespace
 }  // namespace dvso::vo
+
+namespace dvso::vo {
+namespace {
+
+TEST(BackendMarginalization, KeyframeSelectionKeepsNewestAndWindowSize) {
+  WindowOptions options;
+  options.max_keyframes = 4;
+  SceneWindowSpec spec;
+  spec.num_keyframes = 5;
+  spec.num_hosts = 4;
+  spec.grid_step = 24;
+  auto sw = testing::BuildSceneWindow(options, spec);
+  const std::vector<int> ids = sw.window->KeyframesToMarginalize();
+  // 5 keyframes, room for the next one with max 4: two must leave.
+  ASSERT_EQ(ids.size(), 2u);
+  for (int id : ids) EXPECT_NE(id, sw.window->keyframe(sw.window->num_keyframes() - 1).id);
+  for (int id : ids) sw.window->MarginalizeKeyframe(id);
+  EXPECT_EQ(sw.window->num_keyframes(), 3);
+  EXPECT_EQ(sw.window->prior_hessian().rows(), 24);
+  for (int i = 0; i < sw.window->num_keyframes(); ++i) {
+    for (const Point& p : sw.window->keyframe(i).points) {
+      for (const Residual& r : p.residuals) {
+        EXPECT_NE(sw.window->FindKeyframe(r.target_id), nullptr) << "residual into a marginalised keyframe";
+      }
+    }
+  }
+  // The window still optimises with the prior in place.
+  const OptimizationSummary s = sw.window->Optimize(3);
+  EXPECT_LE(s.final_energy, s.initial_energy);
+}
+
+TEST(BackendMarginalization, KeyframeThatLostItsPointsLeavesFirst) {
+  WindowOptions options;
+  SceneWindowSpec spec;
+  spec.num_keyframes = 4;
+  spec.num_hosts = 3;
+  spec.grid_step = 24;
+  auto sw = testing::BuildSceneWindow(options, spec);
+  EXPECT_TRUE(sw.window->KeyframesToMarginalize().empty());  // 4 < 7: nothing to do
+  sw.window->mutable_keyframes()[1].points.clear();          // lost all its points
+  const std::vector<int> ids = sw.window->KeyframesToMarginalize();
+  ASSERT_EQ(ids.size(), 1u);
+  EXPECT_EQ(ids[0], sw.window->keyframe(1).id);
+}
+
+}  // namespace
+}  // namespace dvso::vo
