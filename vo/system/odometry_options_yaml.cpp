@@ -98,6 +98,7 @@ void VisitFields(Options& o, Visitor&& v) {
   v("window", "initial_lambda", o.window.initial_lambda);
   v("window", "min_idepth", o.window.min_idepth);
   v("window", "convergence_step", o.window.convergence_step);
+  v("window", "min_relative_decrease", o.window.min_relative_decrease);
   v("window", "min_residuals_to_marginalize", o.window.min_residuals_to_marginalize);
   v("window", "num_threads", o.window.num_threads);
 }
