@@ -39,7 +39,10 @@ struct OdometryOptions {
   MonoInitializerOptions mono_init;
   WindowOptions window;
 
-  OdometryOptions() { selector.desired_points = 1500; }
+  OdometryOptions() {
+    selector.desired_points = 1500;  // DSO setting_desiredImmatureDensity
+    window.num_threads = 2;          // the target machine has 2 cores; tracking is idle while the window optimises
+  }
 
   // Throws dvso::Error on any invalid value (checks every sub-struct).
   void Check() const;
