@@ -11,7 +11,7 @@ namespace {
 // iteration (all residuals out of bounds): they are left out of the Schur step.
 constexpr double kMinDepthHessian = 1e-12;
 // Points ahead whose target-image rows are prefetched.
-constexpr size_t kPrefetchDistance = 2;
+constexpr size_t kPrefetchDistance = 4;
 
 // Residual sources of a host in evaluation order: every other keyframe, then
 // the host's right image, then its virtual stereo.

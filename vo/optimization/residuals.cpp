@@ -91,6 +91,7 @@ ResidualGeometry TemporalGeometry(const Keyframe& host, const Keyframe& target, 
     const Eigen::Isometry3d T0 = RelativePose(target.world_to_camera_fej, host.world_to_camera_fej);
     g.R_fej = T0.linear().cast<float>();
     g.t_fej = T0.translation().cast<float>();
+    g.fej_is_current = g.R_fej == g.R && g.t_fej == g.t;
   } else {
     g.R_fej = g.R;
     g.t_fej = g.t;
@@ -202,8 +203,11 @@ void EvaluateResidual(const ResidualGeometry& g, const Point& point, double idep
     // the keyframes are in the prior), image gradient at the current p~. The
     // inverse-depth derivative uses the same pose as the pose derivatives so
     // that the scale direction (d t invariant) stays exactly unobservable.
-    Eigen::Vector3f q0 = g.R_fej * ray + d * g.t_fej;
-    if (!(q0.z() > 1e-6f)) q0 = q;  // FEJ pose far off: fall back to the current one
+    Eigen::Vector3f q0 = q;
+    if (!g.fej_is_current) {
+      q0 = g.R_fej * ray + d * g.t_fej;
+      if (!(q0.z() > 1e-6f)) q0 = q;  // FEJ pose far off: fall back to the current one
+    }
     const float inv_q0z = 1.0f / q0.z();
     const float u0 = q0.x() * inv_q0z;
     const float v0 = q0.y() * inv_q0z;

@@ -38,6 +38,7 @@ struct ResidualGeometry {
   // Relative pose at the first estimates (FEJ) for the pose Jacobians.
   Eigen::Matrix3f R_fej = Eigen::Matrix3f::Identity();
   Eigen::Vector3f t_fej = Eigen::Vector3f::Zero();
+  bool fej_is_current = true;  // (R_fej, t_fej) == (R, t): the second projection is skipped
   float affine_scale = 1.0f;  // e^{a_j - a_i}
   float b_host = 0.0f, b_target = 0.0f;
   float term_weight = 1.0f;   // 1 (temporal), mu (static stereo), lambda (virtual stereo)
