@@ -16,6 +16,7 @@ void MonoInitializerOptions::Check() const {
   Require(min_parallax_px > 0, "mono_init min_parallax_px must be > 0");
   Require(regularization >= 0, "mono_init regularization must be >= 0");
   Require(iterations_per_level >= 1, "mono_init iterations_per_level must be >= 1");
+  Require(translation_prior >= 0, "mono_init translation_prior must be >= 0");
 }
 
 MonoInitializer::MonoInitializer(const MonoInitializerOptions& options, const PixelSelectorOptions& selector,
@@ -187,10 +188,15 @@ bool MonoInitializer::AddFrame(const ImagePyramid& frame) {
   std::vector<Vector8d> Hfp;
   std::vector<double> Hpp, bp;
   const double reg = options_.regularization;
+  // DSO's alpha term: prefer rotation over translation while the parallax is
+  // small (a yaw and a sideways translation over a flat inverse depth produce
+  // the same flow); real translation overcomes it once the flow demands it.
+  const double translation_weight = options_.translation_prior * n;
   auto total_energy = [&](int level, const Eigen::Isometry3d& T_e, double a_e, double b_e,
                           const std::vector<double>& id, int* num) {
     double e = Evaluate(frame, level, T_e, a_e, b_e, id, false, nullptr, nullptr, nullptr, nullptr, nullptr, num);
     for (int i = 0; i < n; ++i) e += reg * (id[i] - means[i]) * (id[i] - means[i]);
+    e += translation_weight * T_e.translation().squaredNorm();
     return e;
   };
   const int levels = std::min(frame.num_levels(), first_->num_levels());
@@ -212,6 +218,10 @@ bool MonoInitializer::AddFrame(const ImagePyramid& frame) {
         hpp_damped[i] = h;
         Hsc.noalias() -= Hfp[i] * Hfp[i].transpose() / h;
         bsc.noalias() -= Hfp[i] * g / h;
+      }
+      for (int k = 0; k < 3; ++k) {
+        Hsc(k, k) += translation_weight;
+        bsc(k) += translation_weight * T.translation()(k);
       }
       for (int k = 0; k < 8; ++k) Hsc(k, k) += lambda * Hff(k, k) + 1e-6;
       const Vector8d df = -Hsc.ldlt().solve(bsc);

@@ -25,6 +25,7 @@ struct MonoInitializerOptions {
   double min_parallax_px = 6.0;     // median translation-only flow (level-0 px) needed for success
   double regularization = 50.0;     // weight of the neighbour smoothness prior on inverse depths
   int iterations_per_level = 8;     // LM iterations per pyramid level and frame
+  double translation_prior = 0.0;   // per point: weight of |t|^2 (DSO's alpha term, prefers rotation at low parallax; 0 = off)
   void Check() const;
 };
 

@@ -80,6 +80,7 @@ void VisitFields(Options& o, Visitor&& v) {
   v("mono_init", "min_parallax_px", o.mono_init.min_parallax_px);
   v("mono_init", "regularization", o.mono_init.regularization);
   v("mono_init", "iterations_per_level", o.mono_init.iterations_per_level);
+  v("mono_init", "translation_prior", o.mono_init.translation_prior);
 
   v("window", "max_keyframes", o.window.max_keyframes);
   v("window", "huber_threshold", o.window.huber_threshold);
