@@ -94,6 +94,16 @@ TEST(BackendOptimizer, StaticStereoFixesMetricScale) {
   const Errors before = ComputeErrors(sw);
   sw.window->Optimize(30);
   const Errors after = ComputeErrors(sw);  // no scale alignment
+  // Per-point information: stereo adds to the temporal part.
+  double total = 0.0, temporal = 0.0;
+  for (const Point& p : sw.window->keyframe(0).points) {
+    EXPECT_GE(p.idepth_hessian, p.idepth_hessian_temporal);
+    EXPECT_GE(p.idepth_hessian_temporal, 0.0f);
+    total += p.idepth_hessian;
+    temporal += p.idepth_hessian_temporal;
+  }
+  EXPECT_GT(temporal, 0.0);
+  EXPECT_GT(total, 1.1 * temporal);
   EXPECT_GT(before.max_translation, 0.2);
   EXPECT_LT(after.max_translation, 0.01);
   EXPECT_LT(after.max_rotation, 0.001);

@@ -223,7 +223,9 @@ void WindowLinearizer::LinearizeRange(size_t begin, size_t end, Partial* partial
       }
     }
     for (size_t i = run_begin; i < run_end; ++i) {
-      kfs[h].points[points_[i].point_index].idepth_hessian = static_cast<float>(point_blocks_[i].H_dd);
+      Point& p = kfs[h].points[points_[i].point_index];
+      p.idepth_hessian = static_cast<float>(point_blocks_[i].H_dd);
+      p.idepth_hessian_temporal = static_cast<float>(point_blocks_[i].H_dd_temporal);
     }
     run_begin = run_end;
   }
@@ -257,7 +259,9 @@ void WindowLinearizer::ProcessResidual(size_t i, int h, Point* point_ptr, Residu
   ++partial->active;
 
   const Eigen::Matrix<float, kPatternSize, 1> wd = ev.weight.cwiseProduct(ev.J_idepth);
-  block.H_dd += wd.dot(ev.J_idepth);
+  const double h_dd = wd.dot(ev.J_idepth);
+  block.H_dd += h_dd;
+  if (residual.kind == ResidualKind::kTemporal) block.H_dd_temporal += h_dd;
   block.b_d += wd.dot(ev.r);
   if (!geometry->has_frame_jacobians) return;
 

@@ -100,6 +100,7 @@ class WindowLinearizer {
   };
   struct PointBlock {
     double H_dd = 0.0;
+    double H_dd_temporal = 0.0;  // part of H_dd from temporal residuals
     double b_d = 0.0;
     uint32_t frame_mask = 0;  // keyframes with non-zero cross terms
   };

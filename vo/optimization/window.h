@@ -96,6 +96,7 @@ struct Point {
   double idepth = 1.0;                  // inverse depth in the host camera (1/m)
   std::array<float, kPatternSize> host_intensity{};  // I_i at the pattern pixels around (u, v)
   float idepth_hessian = 0.0f;          // H_dd over the active residuals at the last linearisation (information on d)
+  float idepth_hessian_temporal = 0.0f; // the part of idepth_hessian from temporal residuals (multi-view parallax)
   std::vector<Residual> residuals;
 };
 
@@ -130,6 +131,7 @@ struct MarginalizedPoint {
   Eigen::Vector3d world;                // position in world coordinates
   int num_residuals = 0;                // good temporal residuals it had
   float idepth_hessian = 0.0f;          // information on the inverse depth (H_dd, all active residuals)
+  float idepth_hessian_temporal = 0.0f; // the part of it from temporal residuals only
   float mean_energy = 0.0f;             // mean energy over its active residuals
   float stereo_energy = -1.0f;          // energy of its static stereo residual, -1 if none / not active
 };

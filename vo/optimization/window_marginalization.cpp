@@ -50,6 +50,7 @@ std::vector<MarginalizedPoint> Window::MarginalizeKeyframe(int id) {
       }
       if (active > 0) out.mean_energy /= active;
       out.idepth_hessian = p.idepth_hessian;
+      out.idepth_hessian_temporal = p.idepth_hessian_temporal;
       out.host_id = id;
       out.u = p.u;
       out.v = p.v;
