@@ -8,6 +8,14 @@
 #include "core/lie.h"
 
 namespace dvso::sim {
+namespace {
+
+// Hash key of a 2D grid cell (no signed shifts: cells can be negative).
+int64_t CellKey(int a, int b) {
+  return static_cast<int64_t>((static_cast<uint64_t>(static_cast<uint32_t>(a)) << 32) | static_cast<uint32_t>(b));
+}
+
+}  // namespace
 
 StreetPath::StreetPath(const std::vector<Eigen::Isometry3d>& poses, double camera_height, double spacing,
                        double extension)
@@ -93,7 +101,7 @@ StreetPath::StreetPath(const std::vector<Eigen::Isometry3d>& poses, double camer
   }
   for (int j = 0; j < count; ++j) {
     const auto cell = Cell(samples_[j].road);
-    grid_[(static_cast<int64_t>(cell.first) << 32) ^ static_cast<uint32_t>(cell.second)].push_back(j);
+    grid_[CellKey(cell.first, cell.second)].push_back(j);
   }
 }
 
@@ -113,7 +121,7 @@ bool StreetPath::InZone(const Eigen::Vector3d& q, Zone zone, double margin, int 
   const auto cell = Cell(q);
   for (int da = -1; da <= 1; ++da)
     for (int db = -1; db <= 1; ++db) {
-      const int64_t key = (static_cast<int64_t>(cell.first + da) << 32) ^ static_cast<uint32_t>(cell.second + db);
+      const int64_t key = CellKey(cell.first + da, cell.second + db);
       const auto it = grid_.find(key);
       if (it == grid_.end()) continue;
       for (int j : it->second) {
@@ -148,7 +156,7 @@ void StreetPath::MergeRevisits(double radius, double min_gap) {
     double best_distance = radius;
     for (int da = -1; da <= 1; ++da)
       for (int db = -1; db <= 1; ++db) {
-        const int64_t key = (static_cast<int64_t>(cell.first + da) << 32) ^ static_cast<uint32_t>(cell.second + db);
+        const int64_t key = CellKey(cell.first + da, cell.second + db);
         const auto it = grid_.find(key);
         if (it == grid_.end()) continue;
         for (int i : it->second) {

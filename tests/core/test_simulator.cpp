@@ -41,17 +41,22 @@ SimulatorOptions SmallOptions(int width = 310, int height = 94) {
   return o;
 }
 
+// Bilinear lookups; indices are clamped to the image (rows/columns at the border).
 float Bilinear(const cv::Mat& image, double x, double y) {
   const int x0 = static_cast<int>(std::floor(x)), y0 = static_cast<int>(std::floor(y));
   const double tx = x - x0, ty = y - y0;
-  auto at = [&](int xx, int yy) { return static_cast<double>(image.at<uint8_t>(yy, xx)); };
+  auto at = [&](int xx, int yy) {
+    return static_cast<double>(image.at<uint8_t>(std::min(yy, image.rows - 1), std::min(xx, image.cols - 1)));
+  };
   return static_cast<float>((1 - ty) * ((1 - tx) * at(x0, y0) + tx * at(x0 + 1, y0)) +
                             ty * ((1 - tx) * at(x0, y0 + 1) + tx * at(x0 + 1, y0 + 1)));
 }
 float BilinearF(const cv::Mat& map, double x, double y) {
   const int x0 = static_cast<int>(std::floor(x)), y0 = static_cast<int>(std::floor(y));
   const double tx = x - x0, ty = y - y0;
-  auto at = [&](int xx, int yy) { return static_cast<double>(map.at<float>(yy, xx)); };
+  auto at = [&](int xx, int yy) {
+    return static_cast<double>(map.at<float>(std::min(yy, map.rows - 1), std::min(xx, map.cols - 1)));
+  };
   return static_cast<float>((1 - ty) * ((1 - tx) * at(x0, y0) + tx * at(x0 + 1, y0)) +
                             ty * ((1 - tx) * at(x0, y0 + 1) + tx * at(x0 + 1, y0 + 1)));
 }
