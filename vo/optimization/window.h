@@ -165,7 +165,9 @@ class Window {
   int AddPoint(int host_id, float u, float v, double idepth);
 
   // Runs up to `max_iterations` Levenberg-Marquardt iterations over all
-  // keyframe poses / affine parameters and point inverse depths.
+  // keyframe poses / affine parameters and point inverse depths (Schur
+  // complement on the depths, step accepted only if the energy decreases).
+  // Stops early when converged (convergence_step, min_relative_decrease).
   OptimizationSummary Optimize(int max_iterations);
 
   // Drops residuals that were outliers or out of bounds at the last
@@ -208,9 +210,6 @@ class Window {
   Keyframe* FindMutableKeyframe(int id);
 
  private:
-  friend class WindowOptimizer;
-  friend class WindowMarginalizer;
-
   void AddResidualsForPoint(const Keyframe& host, Point* point) const;
 
   WindowOptions options_;
