@@ -34,6 +34,19 @@ LabelRunOptions LoadLabelRunOptions(const std::string& path) {
   YamlSection& labels = root.Child("labels");
   labels.Read("min_good_residuals", &options.labels.min_good_residuals);
   labels.Read("max_depth", &options.labels.max_depth);
+  labels.Read("max_disparity_stddev", &options.labels.max_disparity_stddev);
+  labels.Read("max_mean_energy", &options.labels.max_mean_energy);
+  labels.Read("max_stereo_energy", &options.labels.max_stereo_energy);
+  labels.Read("future_keyframes", &options.labels.future_keyframes);
+  YamlSection& check = labels.Child("stereo_check");
+  check.Read("enabled", &options.labels.stereo_check.enabled);
+  check.Read("window_radius", &options.labels.stereo_check.window_radius);
+  check.Read("max_offset", &options.labels.stereo_check.max_offset);
+  check.Read("exclusion", &options.labels.stereo_check.exclusion);
+  check.Read("min_cost_gap", &options.labels.stereo_check.min_cost_gap);
+  check.Read("max_cost", &options.labels.stereo_check.max_cost);
+  check.Read("max_disparity", &options.labels.stereo_check.max_disparity);
+  check.Read("left_right_check", &options.labels.stereo_check.left_right_check);
   labels.Read("occlusion_radius", &options.labels.projection.occlusion_radius);
   labels.Read("occlusion_margin", &options.labels.projection.occlusion_margin);
   labels.Read("min_depth", &options.labels.projection.min_depth);
@@ -59,6 +72,19 @@ std::string LabelRunOptionsToYaml(const LabelRunOptions& options) {
   out << "labels:\n"
       << "  min_good_residuals: " << l.min_good_residuals << "\n"
       << "  max_depth: " << l.max_depth << "\n"
+      << "  max_disparity_stddev: " << l.max_disparity_stddev << "\n"
+      << "  max_mean_energy: " << l.max_mean_energy << "\n"
+      << "  max_stereo_energy: " << l.max_stereo_energy << "\n"
+      << "  future_keyframes: " << l.future_keyframes << "\n"
+      << "  stereo_check:\n"
+      << "    enabled: " << (l.stereo_check.enabled ? "true" : "false") << "\n"
+      << "    window_radius: " << l.stereo_check.window_radius << "\n"
+      << "    max_offset: " << l.stereo_check.max_offset << "\n"
+      << "    exclusion: " << l.stereo_check.exclusion << "\n"
+      << "    min_cost_gap: " << l.stereo_check.min_cost_gap << "\n"
+      << "    max_cost: " << l.stereo_check.max_cost << "\n"
+      << "    max_disparity: " << l.stereo_check.max_disparity << "\n"
+      << "    left_right_check: " << (l.stereo_check.left_right_check ? "true" : "false") << "\n"
       << "  occlusion_radius: " << l.projection.occlusion_radius << "\n"
       << "  occlusion_margin: " << l.projection.occlusion_margin << "\n"
       << "  min_depth: " << l.projection.min_depth << "\n"
@@ -114,9 +140,18 @@ LabelRunSummary RunLabelExtraction(const std::string& sequence_dir, const std::s
                                   GroundTruth(options, i));
     }
   } else {
-    LabelWriter writer(sequence->camera(), options.labels, out_dir, [&](int frame_index, const cv::Mat& labels) {
-      summary.statistics.AddFrame(labels, GroundTruth(options, frame_index));
-    });
+    SequenceReadOptions read_pair;
+    read_pair.load_right = true;
+    LabelWriter writer(
+        sequence->camera(), options.labels, out_dir,
+        [&](int frame_index, const cv::Mat& labels) {
+          summary.statistics.AddFrame(labels, GroundTruth(options, frame_index));
+        },
+        [&](int frame_index, cv::Mat* left, cv::Mat* right) {
+          StereoFrame frame = sequence->Read(frame_index, read_pair);
+          *left = frame.left;
+          *right = frame.right;
+        });
     vo::SequenceRunOptions run;
     run.first = options.first;
     run.count = end - options.first;

@@ -20,6 +20,7 @@
 #include "core/camera.h"
 #include "sdso_labels/label_map.h"
 #include "sdso_labels/label_stats.h"
+#include "sdso_labels/stereo_check.h"
 #include "vo/system/observer.h"
 
 namespace dvso::labels {
@@ -27,26 +28,39 @@ namespace dvso::labels {
 struct LabelOptions {
   int min_good_residuals = 2;        // a point needs at least this many good temporal residuals
   double max_depth = 80.0;           // m: farther points are not labelled (KITTI-like depth range)
+  // Disparity standard deviation (px) implied by the point's inverse-depth information H_dd,
+  // sigma_disp = fx * baseline / sqrt(H_dd), for unit intensity noise; larger = not labelled.
+  double max_disparity_stddev = 1e9;
+  double max_mean_energy = 1e9;      // mean photometric energy over the point's active residuals
+  double max_stereo_energy = 1e9;    // energy of its static stereo residual (ignored when it has none)
+  // Keyframes created after a frame whose points also label it (forward motion keeps
+  // them in view); 0 = only the window the frame was tracked against.
+  int future_keyframes = 5;
   bool overwrite = false;            // rewrite label files that already exist (else resume: keep them)
   LabelProjectionOptions projection; // occlusion handling and ranges of the rendered maps
+  StereoCheckOptions stereo_check;   // confidence test on the labelled frame's own stereo pair
 
   void Check() const;
 };
 
 // Receives each finished label map (frame index, CV_32F disparity map).
 using LabelSink = std::function<void(int frame_index, const cv::Mat& labels)>;
+// Loads the rectified grey pair of a frame (for the stereo check).
+using StereoPairLoader = std::function<void(int frame_index, cv::Mat* left, cv::Mat* right)>;
 
 class LabelWriter : public vo::OdometryObserver {
  public:
   // Writes `out_dir/%06d.png` for every tracked frame (KITTI uint16, *256,
   // 0 = no label), atomically. `sink` (optional) also gets every map, e.g.
-  // for statistics against ground truth.
-  LabelWriter(const StereoCamera& camera, const LabelOptions& options, std::string out_dir, LabelSink sink = {});
+  // for statistics against ground truth. Without `loader` the stereo check is skipped.
+  LabelWriter(const StereoCamera& camera, const LabelOptions& options, std::string out_dir, LabelSink sink = {},
+              StereoPairLoader loader = {});
 
   void OnFrameTracked(const vo::FrameEvent& event) override;
   void OnWindowOptimized(const vo::WindowEvent& event) override;
   void OnPointsMarginalized(const std::vector<vo::PointInfo>& points) override;
   void OnKeyframeMarginalized(const vo::KeyframeInfo& keyframe) override;
+  void OnReset(int frame_index) override;
   void OnFinished() override;
 
   int frames_written() const { return frames_written_; }
@@ -58,6 +72,7 @@ class LabelWriter : public vo::OdometryObserver {
     int reference;                  // keyframe frame index, -1 = none (lost / initialising)
     Eigen::Isometry3d T_ref_frame;  // or T_world_frame when reference == -1
     std::vector<int> hosts;         // keyframes whose points label this frame
+    int future_hosts_wanted = 0;    // later keyframes still to be added to hosts
   };
   struct HostPoints {
     std::vector<vo::PointInfo> points;  // final values of well-constrained points
@@ -72,6 +87,7 @@ class LabelWriter : public vo::OdometryObserver {
   LabelOptions options_;
   std::string out_dir_;
   LabelSink sink_;
+  StereoPairLoader loader_;
   std::vector<int> window_;                          // keyframes in the window after the last optimisation
   std::vector<PendingFrame> pending_;                // in input order
   std::map<int, HostPoints> host_points_;            // by host keyframe frame index

@@ -34,6 +34,7 @@ vo::PointInfo Point(int host, float u, float v, double idepth, int good) {
   p.v = v;
   p.idepth = idepth;
   p.num_good_residuals = good;
+  p.idepth_hessian = 1e6f;  // well constrained (sigma_disp = fxB / 1000)
   return p;
 }
 
@@ -48,7 +49,9 @@ Eigen::Isometry3d Forward(double z) {
 TEST(LabelWriter, WritesWhenKeyframesAreFinalWithFinalPoses) {
   const std::string out = TempDir();
   std::map<int, cv::Mat> seen;
-  LabelWriter writer(Camera(), LabelOptions(), out, [&](int i, const cv::Mat& m) { seen[i] = m.clone(); });
+  LabelOptions options;
+  options.future_keyframes = 0;  // only the window at tracking time (later keyframes: next test)
+  LabelWriter writer(Camera(), options, out, [&](int i, const cv::Mat& m) { seen[i] = m.clone(); });
 
   // Frame 0: keyframe, window = {0}.
   vo::WindowEvent w0;
@@ -106,4 +109,40 @@ TEST(LabelWriter, ResumeKeepsExistingFiles) {
   writer.OnFrameTracked(lost);
   writer.OnFinished();
   EXPECT_FLOAT_EQ(ReadKittiMapPng(out + "/000000.png").at<float>(1, 1), 42.f);
+}
+
+TEST(LabelWriter, LaterKeyframesAlsoLabelEarlierFrames) {
+  const std::string out = TempDir() + "_future";
+  std::map<int, cv::Mat> seen;
+  LabelOptions options;
+  options.future_keyframes = 1;
+  LabelWriter writer(Camera(), options, out, [&](int i, const cv::Mat& m) { seen[i] = m.clone(); });
+  vo::WindowEvent w0;
+  w0.frame_index = 0;
+  w0.keyframes.push_back({0, Eigen::Isometry3d::Identity(), 0, 0});
+  writer.OnWindowOptimized(w0);
+  vo::FrameEvent f0;
+  f0.frame_index = 0;
+  f0.status = vo::FrameStatus::kKeyframe;
+  f0.reference_frame_index = 0;
+  writer.OnFrameTracked(f0);
+  // Keyframe 0 leaves without points: frame 0 must still wait for one later keyframe.
+  writer.OnPointsMarginalized({});
+  writer.OnKeyframeMarginalized({0, Eigen::Isometry3d::Identity(), 0, 0});
+  EXPECT_EQ(writer.frames_written(), 0);
+  // Keyframe 1, 2 m ahead, hosts a point 10 m in front of it (12 m from frame 0).
+  vo::WindowEvent w1;
+  w1.frame_index = 1;
+  w1.keyframes.push_back({1, Forward(2.0), 0, 0});
+  writer.OnWindowOptimized(w1);
+  vo::FrameEvent f1 = f0;
+  f1.frame_index = 1;
+  f1.reference_frame_index = 1;
+  writer.OnFrameTracked(f1);
+  writer.OnPointsMarginalized({Point(1, 20, 10, 0.1, 3)});
+  writer.OnKeyframeMarginalized({1, Forward(2.0), 0, 0});
+  writer.OnFinished();
+  ASSERT_TRUE(seen.count(0) && seen.count(1));
+  EXPECT_NEAR(seen[0].at<float>(10, 20), 100 * 0.5 / 12.0, 1e-5);
+  EXPECT_FLOAT_EQ(seen[1].at<float>(10, 20), 100 * 0.5 * 0.1f);
 }
