@@ -70,7 +70,7 @@ Fixture MakeFixture(const std::function<float(double, double)>& image_fn, bool s
   target.b = -5.0;
   target.left = MakePyramid(image, f.camera.left);
   f.window->AddKeyframe(target);
-  f.point_id = f.window->AddPoint(0, 151.3f, 112.6f, 0.25);
+  f.point_id = f.window->AddPoint(0, 62.3f, 187.6f, 0.25);
   EXPECT_GE(f.point_id, 0);
   return f;
 }
