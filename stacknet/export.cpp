@@ -31,6 +31,8 @@ torch::jit::Module TraceStackNet(StackNet& model, bool use_residual, int input_h
   torch::jit::Module mirror(use_residual ? "DvsoStackNet" : "DvsoSimpleNet");
   for (const auto& item : model->named_parameters()) {
     std::string name = item.key();
+    // A SimpleNet export carries only SimpleNet's weights.
+    if (!use_residual && name.rfind("residual.", 0) == 0) continue;
     std::replace(name.begin(), name.end(), '.', '_');
     // Same tensor object: the tracer maps it to `self.<name>` instead of a constant.
     mirror.register_parameter(name, item.value(), /*is_buffer=*/false);

@@ -31,6 +31,10 @@ TEST(Export, TracedModuleMatchesTheCppModuleAtTwoSizes) {
     traced.save(path);
     torch::jit::Module loaded = torch::jit::load(path);
     EXPECT_EQ(loaded.attr("input_width").toInt(), 64);
+    // Exactly the weights of the exported network travel with it.
+    const size_t expected_parameters =
+        use_residual ? net->parameters().size() : net->simple_net()->parameters().size();
+    EXPECT_EQ(loaded.parameters().size(), expected_parameters);
     for (const auto& size : {std::pair<int, int>{32, 64}, std::pair<int, int>{64, 128}}) {
       const torch::Tensor image = torch::rand({1, 3, size.first, size.second});
       torch::NoGradGuard no_grad;
@@ -43,7 +47,9 @@ TEST(Export, TracedModuleMatchesTheCppModuleAtTwoSizes) {
       EXPECT_LT(MaxDifference(traced_right, right), 1e-5);
       // Pixels of the input: bounded by max_disparity * width.
       EXPECT_GT(left.max().item<double>(), 0.0);
-      if (!use_residual) EXPECT_LT(left.max().item<double>(), 0.3 * size.second);
+      if (!use_residual) {
+        EXPECT_LT(left.max().item<double>(), 0.3 * size.second);
+      }
     }
   }
   fs::remove(path);
