@@ -2,37 +2,21 @@
 // exactly one parseable object, plots are written, bad input is one clear error.
 #include <gtest/gtest.h>
 
-#include <array>
-#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
 #include "core/trajectory.h"
+#include "tests/dvso_cli_runner.h"
 
 namespace fs = std::filesystem;
 
 namespace dvso {
 namespace {
 
-struct CliRun {
-  int exit_code = -1;
-  std::string out;  // stdout only (or stdout + stderr when merged)
-};
-
-CliRun RunDvso(const std::string& args, bool merge_stderr) {
-  const std::string command =
-      std::string(DVSO_BINARY) + " " + args + (merge_stderr ? " 2>&1" : " 2>/dev/null");
-  CliRun r;
-  FILE* pipe = ::popen(command.c_str(), "r");
-  if (pipe == nullptr) return r;
-  std::array<char, 4096> buffer{};
-  while (std::fgets(buffer.data(), buffer.size(), pipe) != nullptr) r.out += buffer.data();
-  const int status = ::pclose(pipe);
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
+using testing::CliRun;
+using testing::RunDvso;
 
 struct TempDir {
   fs::path path;

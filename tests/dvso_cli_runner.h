@@ -1,0 +1,32 @@
+// Shared by the end-to-end test suites: runs the built `dvso` binary
+// (DVSO_BINARY, defined for every test target) and captures its output.
+#pragma once
+
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
+#include <string>
+
+namespace dvso::testing {
+
+struct CliRun {
+  int exit_code = -1;  // -1 when the process could not be started or did not exit normally
+  std::string out;     // stdout, plus stderr when merged
+};
+
+// Runs `dvso ARGS`; stderr goes into `out` when merge_stderr, else is discarded.
+inline CliRun RunDvso(const std::string& args, bool merge_stderr = true) {
+  const std::string command =
+      std::string(DVSO_BINARY) + " " + args + (merge_stderr ? " 2>&1" : " 2>/dev/null");
+  CliRun run;
+  FILE* pipe = ::popen(command.c_str(), "r");
+  if (pipe == nullptr) return run;
+  std::array<char, 4096> buffer{};
+  while (std::fgets(buffer.data(), buffer.size(), pipe) != nullptr) run.out += buffer.data();
+  const int status = ::pclose(pipe);
+  run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return run;
+}
+
+}  // namespace dvso::testing
