@@ -59,8 +59,12 @@ void RunLabels(const LabelsArgs& args) {
       std::cout << "== " << sequence << " -> " << out << (summary.skipped_complete ? " (complete, skipped)" : "") << "\n"
                 << summary.statistics.ToText();
       if (!summary.skipped_complete) {
-        std::cout << "speed:                  " << summary.odometry_ms_per_frame << " ms/frame odometry, "
-                  << summary.total_ms_per_frame << " ms/frame total\n";
+        std::cout << "stereo check:           kept " << summary.verified_labels << " of " << summary.projected_labels
+                  << " projected labels\n"
+                  << "odometry:               " << summary.keyframes << " keyframes, " << summary.lost << " lost frames\n"
+                  << "speed (ms/frame):       odometry " << summary.odometry_ms_per_frame << ", labels "
+                  << summary.labels_ms_per_frame << ", total " << summary.total_ms_per_frame
+                  << " (image decoding " << summary.image_read_ms_per_frame << ", not included)\n";
       }
       std::cout << std::flush;
     }

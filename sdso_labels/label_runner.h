@@ -31,8 +31,14 @@ std::string LabelRunOptionsToYaml(const LabelRunOptions& options);
 struct LabelRunSummary {
   std::string sequence;
   bool skipped_complete = false;  // all label files existed: odometry not run (resume)
-  double odometry_ms_per_frame = 0;
-  double total_ms_per_frame = 0;  // odometry + label extraction + writing (excl. image loading)
+  // Timing (wall clock; image decoding and the GT evaluation excluded from all three):
+  double odometry_ms_per_frame = 0;    // the odometry alone (total minus the label writer's time)
+  double labels_ms_per_frame = 0;      // label extraction (projection, stereo check) + PNG writing
+  double total_ms_per_frame = 0;       // odometry + labels
+  double image_read_ms_per_frame = 0;  // decoding the pair (once: the stereo check reuses it)
+  long projected_labels = 0;           // labels before the stereo check (all frames)
+  long verified_labels = 0;            // labels kept by it
+  int keyframes = 0, lost = 0;         // of the odometry run
   LabelStatistics statistics;
 
   nlohmann::json ToJson() const;

@@ -1,6 +1,7 @@
 #include "sdso_labels/label_writer.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 
@@ -10,12 +11,21 @@
 
 namespace dvso::labels {
 
+namespace {
+
+double MsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
+}  // namespace
+
 void LabelOptions::Check() const {
   Require(min_good_residuals >= 0, "labels: min_good_residuals must be >= 0");
   Require(max_depth > projection.min_depth, "labels: max_depth must exceed projection.min_depth");
   Require(max_disparity_stddev > 0, "labels: max_disparity_stddev must be > 0");
   Require(max_mean_energy > 0 && max_stereo_energy > 0, "labels: energy thresholds must be > 0");
-  Require(future_keyframes >= 0 && future_keyframes <= 20, "labels: future_keyframes must be in [0, 20]");
+  Require(future_keyframes >= 0 && future_keyframes <= 50, "labels: future_keyframes must be in [0, 50]");
+  Require(past_keyframes >= 0 && past_keyframes <= 50, "labels: past_keyframes must be in [0, 50]");
   stereo_check.Check();
   projection.Check();
 }
@@ -32,6 +42,13 @@ LabelWriter::LabelWriter(const StereoCamera& camera, const LabelOptions& options
   EnsureDirectory(out_dir_);
 }
 
+void LabelWriter::AddUser(int host) { ++hosts_[host].users; }
+
+void LabelWriter::RemoveUser(int host) {
+  auto it = hosts_.find(host);
+  if (it != hosts_.end() && --it->second.users <= 0) hosts_.erase(it);
+}
+
 void LabelWriter::OnWindowOptimized(const vo::WindowEvent& event) {
   window_.clear();
   for (const auto& kf : event.keyframes) window_.push_back(kf.frame_index);
@@ -41,7 +58,7 @@ void LabelWriter::OnWindowOptimized(const vo::WindowEvent& event) {
     if (frame.future_hosts_wanted <= 0 || newest <= frame.frame_index) continue;
     if (std::find(frame.hosts.begin(), frame.hosts.end(), newest) != frame.hosts.end()) continue;
     frame.hosts.push_back(newest);
-    ++host_points_[newest].users;
+    AddUser(newest);
     --frame.future_hosts_wanted;
   }
 }
@@ -49,6 +66,9 @@ void LabelWriter::OnWindowOptimized(const vo::WindowEvent& event) {
 void LabelWriter::OnReset(int /*frame_index*/) {
   // Keyframes of the next map live in another world frame: never mix them in.
   for (PendingFrame& frame : pending_) frame.future_hosts_wanted = 0;
+  for (int host : recent_past_) RemoveUser(host);
+  recent_past_.clear();
+  window_.clear();
   FlushReady();
 }
 
@@ -57,32 +77,63 @@ void LabelWriter::OnFrameTracked(const vo::FrameEvent& event) {
                      event.reference_frame_index >= 0 ? event.T_ref_frame : event.T_world_camera, {}, 0};
   if (frame.reference >= 0) {
     frame.future_hosts_wanted = options_.future_keyframes;
-    frame.hosts = window_;
+    frame.hosts.assign(recent_past_.begin(), recent_past_.end());
+    frame.hosts.insert(frame.hosts.end(), window_.begin(), window_.end());
     if (std::find(frame.hosts.begin(), frame.hosts.end(), frame.reference) == frame.hosts.end()) {
       frame.hosts.push_back(frame.reference);
     }
-    for (int host : frame.hosts) ++host_points_[host].users;
+    for (int host : frame.hosts) AddUser(host);
   }
   pending_.push_back(std::move(frame));
   FlushReady();
 }
 
+bool LabelWriter::Usable(const vo::PointInfo& p) const {
+  if (p.num_good_residuals < options_.min_good_residuals || !(p.idepth > 0)) return false;
+  if (1.0 / p.idepth > options_.max_depth) return false;
+  if (!(p.idepth_hessian > 0) || camera_.FxB() / std::sqrt(p.idepth_hessian) > options_.max_disparity_stddev) {
+    return false;
+  }
+  if (p.mean_energy > options_.max_mean_energy) return false;
+  return p.stereo_energy < 0 || p.stereo_energy <= options_.max_stereo_energy;
+}
+
 void LabelWriter::OnPointsMarginalized(const std::vector<vo::PointInfo>& points) {
   for (const auto& p : points) {
-    if (p.num_good_residuals < options_.min_good_residuals || !(p.idepth > 0)) continue;
-    if (1.0 / p.idepth > options_.max_depth) continue;
-    if (!(p.idepth_hessian > 0) || camera_.FxB() / std::sqrt(p.idepth_hessian) > options_.max_disparity_stddev) continue;
-    if (p.mean_energy > options_.max_mean_energy) continue;
-    if (p.stereo_energy >= 0 && p.stereo_energy > options_.max_stereo_energy) continue;
-    // Points of a host no pending frame needs are of no use any more.
-    auto it = host_points_.find(p.host_frame_index);
-    if (it == host_points_.end()) continue;
+    if (!Usable(p)) continue;
+    // Keep points of keyframes that a pending frame needs, or that may become a recent past keyframe.
+    auto it = hosts_.find(p.host_frame_index);
+    if (it == hosts_.end()) {
+      if (options_.past_keyframes == 0) continue;
+      it = hosts_.emplace(p.host_frame_index, Host{}).first;
+    }
     it->second.points.push_back(p);
   }
 }
 
 void LabelWriter::OnKeyframeMarginalized(const vo::KeyframeInfo& keyframe) {
-  final_poses_[keyframe.frame_index] = keyframe.T_world_camera;
+  const int id = keyframe.frame_index;
+  if (options_.past_keyframes > 0) {
+    AddUser(id);  // held while among the recent past keyframes
+    recent_past_.push_back(id);
+  }
+  auto it = hosts_.find(id);
+  if (it != hosts_.end()) {
+    Host& host = it->second;
+    host.final = true;
+    host.T_world_camera = keyframe.T_world_camera;
+    // Re-derive the world points from the host's final pose.
+    host.world.reserve(host.points.size());
+    for (const auto& p : host.points) {
+      host.world.push_back({keyframe.T_world_camera * (camera_.left.Unproject(p.u, p.v) / p.idepth)});
+    }
+    host.points.clear();
+    host.points.shrink_to_fit();
+  }
+  if (static_cast<int>(recent_past_.size()) > options_.past_keyframes) {
+    RemoveUser(recent_past_.front());
+    recent_past_.pop_front();
+  }
   FlushReady();
 }
 
@@ -93,14 +144,17 @@ void LabelWriter::OnFinished() {
   // window's end); write it with what is known so every frame has a file.
   while (!pending_.empty()) {
     Write(pending_.front());
-    pending_.erase(pending_.begin());
+    pending_.pop_front();
   }
+  for (int host : recent_past_) RemoveUser(host);
+  recent_past_.clear();
 }
 
 bool LabelWriter::Ready(const PendingFrame& frame) const {
   if (frame.future_hosts_wanted > 0) return false;
   for (int host : frame.hosts) {
-    if (final_poses_.count(host) == 0) return false;
+    auto it = hosts_.find(host);
+    if (it == hosts_.end() || !it->second.final) return false;
   }
   return true;
 }
@@ -109,48 +163,40 @@ void LabelWriter::FlushReady() {
   // Frames are written in input order, so a resumed run never leaves holes.
   while (!pending_.empty() && Ready(pending_.front())) {
     Write(pending_.front());
-    pending_.erase(pending_.begin());
+    pending_.pop_front();
   }
 }
 
 void LabelWriter::Write(const PendingFrame& frame) {
+  const auto start = std::chrono::steady_clock::now();
   cv::Mat labels(camera_.left.height, camera_.left.width, CV_32F, cv::Scalar(0));
-  if (frame.reference >= 0 && final_poses_.count(frame.reference) > 0) {
-    const Eigen::Isometry3d T_world_frame = final_poses_.at(frame.reference) * frame.T_ref_frame;
+  const auto reference = frame.reference >= 0 ? hosts_.find(frame.reference) : hosts_.end();
+  if (reference != hosts_.end() && reference->second.final) {
+    const Eigen::Isometry3d T_world_frame = reference->second.T_world_camera * frame.T_ref_frame;
     std::vector<LabelPoint> points;
-    for (int host : frame.hosts) {
-      auto it = host_points_.find(host);
-      auto pose = final_poses_.find(host);
-      if (it == host_points_.end() || pose == final_poses_.end()) continue;
-      for (const auto& p : it->second.points) {
-        // Re-derive the world point from the host's final pose.
-        const Eigen::Vector3d in_host = camera_.left.Unproject(p.u, p.v) / p.idepth;
-        points.push_back({pose->second * in_host});
-      }
+    for (int id : frame.hosts) {
+      auto it = hosts_.find(id);
+      if (it == hosts_.end() || !it->second.final) continue;
+      points.insert(points.end(), it->second.world.begin(), it->second.world.end());
     }
-    RenderLabelMap(points, T_world_frame, camera_, options_.projection, &labels);
+    counters_.projected += RenderLabelMap(points, T_world_frame, camera_, options_.projection, &labels);
     if (loader_ && options_.stereo_check.enabled) {
       cv::Mat left, right;
       loader_(frame.frame_index, &left, &right);
       VerifyLabelsWithStereo(left, right, options_.stereo_check, &labels);
     }
   }
+  const int kept = cv::countNonZero(labels);
+  counters_.verified += kept;
+  const auto written = std::chrono::steady_clock::now();
+  counters_.extract_ms += MsSince(start);
   const std::string path = JoinPath(out_dir_, FrameFileName(frame.frame_index, ".png"));
   if (options_.overwrite || !std::filesystem::exists(path)) WriteKittiMapPng(path, labels);
+  counters_.write_ms += MsSince(written);
+  ++counters_.frames;
   if (sink_) sink_(frame.frame_index, labels);
   ++frames_written_;
-  for (int host : frame.hosts) {
-    auto it = host_points_.find(host);
-    if (it != host_points_.end() && --it->second.users <= 0) host_points_.erase(it);
-  }
-  // Final poses of keyframes no longer referenced can go too (memory stays flat).
-  for (auto it = final_poses_.begin(); it != final_poses_.end();) {
-    const int id = it->first;
-    const bool needed = std::any_of(pending_.begin(), pending_.end(), [id](const PendingFrame& f) {
-      return f.reference == id || std::find(f.hosts.begin(), f.hosts.end(), id) != f.hosts.end();
-    });
-    it = needed || host_points_.count(id) ? std::next(it) : final_poses_.erase(it);
-  }
+  for (int host : frame.hosts) RemoveUser(host);
 }
 
 }  // namespace dvso::labels

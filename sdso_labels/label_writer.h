@@ -1,19 +1,23 @@
 // LabelWriter: the observer that turns Stereo DSO's optimised sparse points
 // into per-frame disparity labels (paper section 3.2, Omega_DSO; section 5.1
-// dataset K_o). A frame's labels are written once every keyframe that was in
-// the window when the frame was tracked has been marginalised, so both the
-// points and the poses used are final:
-//   - keyframes: their own points (at their exact pixels) plus the other
-//     window points projected into them;
-//   - other frames: the window's points projected with the final pose
-//     T_world_frame = T_world_ref(final) * T_ref_frame(tracked).
-// Only well-constrained points are used (enough good residuals, positive,
-// in range), and occluded ones are dropped (label_map.h).
+// dataset K_o). A frame's labels are written once every keyframe whose points
+// label it has been marginalised, so both the points and the poses used are
+// final. The keyframes that label a frame ("hosts") are
+//   - the keyframes in the window when the frame was tracked,
+//   - the `past_keyframes` most recently marginalised ones before that, and
+//   - the next `future_keyframes` keyframes created after it
+// (in forward motion, far points stay in view over many keyframes). Their
+// points are projected with the frame's final pose
+// T_world_frame = T_world_ref(final) * T_ref_frame(tracked); keyframes get
+// their own points at their exact pixels. Only well-constrained points are
+// used (enough good residuals, positive, in range), occluded ones are dropped
+// (label_map.h) and each label is verified on the frame's own stereo pair
+// (stereo_check.h).
 #pragma once
 
+#include <deque>
 #include <functional>
 #include <map>
-#include <set>
 #include <string>
 #include <vector>
 
@@ -36,6 +40,8 @@ struct LabelOptions {
   // Keyframes created after a frame whose points also label it (forward motion keeps
   // them in view); 0 = only the window the frame was tracked against.
   int future_keyframes = 5;
+  // Keyframes marginalised before a frame was tracked whose points also label it.
+  int past_keyframes = 0;
   bool overwrite = false;            // rewrite label files that already exist (else resume: keep them)
   LabelProjectionOptions projection; // occlusion handling and ranges of the rendered maps
   StereoCheckOptions stereo_check;   // confidence test on the labelled frame's own stereo pair
@@ -47,6 +53,15 @@ struct LabelOptions {
 using LabelSink = std::function<void(int frame_index, const cv::Mat& labels)>;
 // Loads the rectified grey pair of a frame (for the stereo check).
 using StereoPairLoader = std::function<void(int frame_index, cv::Mat* left, cv::Mat* right)>;
+
+// Counters of the label extraction (for summaries and tuning).
+struct LabelWriterCounters {
+  long frames = 0;
+  long projected = 0;      // labels after projection and occlusion handling
+  long verified = 0;       // labels kept by the stereo check (= written)
+  double extract_ms = 0;   // projection + stereo check
+  double write_ms = 0;     // PNG encoding and writing
+};
 
 class LabelWriter : public vo::OdometryObserver {
  public:
@@ -65,20 +80,30 @@ class LabelWriter : public vo::OdometryObserver {
 
   int frames_written() const { return frames_written_; }
   int frames_pending() const { return static_cast<int>(pending_.size()); }
+  // Keyframes whose points or poses are still held (memory stays bounded).
+  int hosts_held() const { return static_cast<int>(hosts_.size()); }
+  const LabelWriterCounters& counters() const { return counters_; }
 
  private:
   struct PendingFrame {
     int frame_index;
     int reference;                  // keyframe frame index, -1 = none (lost / initialising)
     Eigen::Isometry3d T_ref_frame;  // or T_world_frame when reference == -1
-    std::vector<int> hosts;         // keyframes whose points label this frame
+    std::vector<int> hosts;         // keyframes whose points label this frame (includes reference)
     int future_hosts_wanted = 0;    // later keyframes still to be added to hosts
   };
-  struct HostPoints {
+  // A keyframe some pending frame needs: its final points and pose once marginalised.
+  struct Host {
     std::vector<vo::PointInfo> points;  // final values of well-constrained points
-    int users = 0;                      // pending frames that need them
+    std::vector<LabelPoint> world;      // the same in the world frame (once final)
+    Eigen::Isometry3d T_world_camera = Eigen::Isometry3d::Identity();  // final pose
+    bool final = false;                 // marginalised: points and pose are final
+    int users = 0;                      // pending frames (+1 while among the recent past keyframes)
   };
 
+  bool Usable(const vo::PointInfo& point) const;
+  void AddUser(int host);
+  void RemoveUser(int host);
   bool Ready(const PendingFrame& frame) const;
   void FlushReady();
   void Write(const PendingFrame& frame);
@@ -88,11 +113,12 @@ class LabelWriter : public vo::OdometryObserver {
   std::string out_dir_;
   LabelSink sink_;
   StereoPairLoader loader_;
-  std::vector<int> window_;                          // keyframes in the window after the last optimisation
-  std::vector<PendingFrame> pending_;                // in input order
-  std::map<int, HostPoints> host_points_;            // by host keyframe frame index
-  std::map<int, Eigen::Isometry3d> final_poses_;     // marginalised keyframes: T_world_camera
+  std::vector<int> window_;             // keyframes in the window after the last optimisation
+  std::deque<int> recent_past_;         // last past_keyframes marginalised keyframes (same map)
+  std::deque<PendingFrame> pending_;    // in input order
+  std::map<int, Host> hosts_;           // by keyframe frame index; erased when users drop to 0
   int frames_written_ = 0;
+  LabelWriterCounters counters_;
 };
 
 }  // namespace dvso::labels

@@ -44,6 +44,37 @@ Eigen::Isometry3d Forward(double z) {
   return T;
 }
 
+// A frame tracked against keyframe `reference` (a keyframe itself when frame == reference).
+vo::FrameEvent Tracked(int frame, int reference, const Eigen::Isometry3d& T_ref_frame = Eigen::Isometry3d::Identity()) {
+  vo::FrameEvent e;
+  e.frame_index = frame;
+  e.status = frame == reference ? vo::FrameStatus::kKeyframe : vo::FrameStatus::kTracked;
+  e.reference_frame_index = reference;
+  e.T_ref_frame = T_ref_frame;
+  return e;
+}
+
+vo::FrameEvent Lost(int frame) {
+  vo::FrameEvent e;
+  e.frame_index = frame;
+  e.status = vo::FrameStatus::kLost;
+  return e;
+}
+
+// The window after keyframe `newest` was added: keyframes (id, pose), oldest first.
+vo::WindowEvent Window(int newest, const std::vector<std::pair<int, Eigen::Isometry3d>>& keyframes) {
+  vo::WindowEvent w;
+  w.frame_index = newest;
+  for (const auto& [id, pose] : keyframes) w.keyframes.push_back({id, pose, 0, 0});
+  return w;
+}
+
+// Keyframe `id` leaves the window with its points and final pose.
+void Marginalize(LabelWriter* writer, int id, const Eigen::Isometry3d& pose, const std::vector<vo::PointInfo>& points) {
+  writer->OnPointsMarginalized(points);
+  writer->OnKeyframeMarginalized({id, pose, 0, 0});
+}
+
 }  // namespace
 
 TEST(LabelWriter, WritesWhenKeyframesAreFinalWithFinalPoses) {
@@ -53,29 +84,17 @@ TEST(LabelWriter, WritesWhenKeyframesAreFinalWithFinalPoses) {
   options.future_keyframes = 0;  // only the window at tracking time (later keyframes: next test)
   LabelWriter writer(Camera(), options, out, [&](int i, const cv::Mat& m) { seen[i] = m.clone(); });
 
-  // Frame 0: keyframe, window = {0}.
-  vo::WindowEvent w0;
-  w0.keyframes.push_back({0, Eigen::Isometry3d::Identity(), 0, 0});
-  writer.OnWindowOptimized(w0);
-  vo::FrameEvent f0;
-  f0.frame_index = 0;
-  f0.status = vo::FrameStatus::kKeyframe;
-  f0.reference_frame_index = 0;
-  writer.OnFrameTracked(f0);
-  // Frame 1: tracked 1 m ahead of keyframe 0.
-  vo::FrameEvent f1 = f0;
-  f1.frame_index = 1;
-  f1.status = vo::FrameStatus::kTracked;
-  f1.T_ref_frame = Forward(1.0);
-  writer.OnFrameTracked(f1);
+  // Frame 0: keyframe, window = {0}; frame 1 tracked 1 m ahead of it.
+  writer.OnWindowOptimized(Window(0, {{0, Eigen::Isometry3d::Identity()}}));
+  writer.OnFrameTracked(Tracked(0, 0));
+  writer.OnFrameTracked(Tracked(1, 0, Forward(1.0)));
   EXPECT_EQ(writer.frames_written(), 0);  // keyframe 0 is not final yet
   EXPECT_FALSE(fs::exists(out + "/000000.png"));
 
   // Keyframe 0 leaves with two points: one well constrained at the image centre, 10 m away,
   // one with a single good residual (dropped by min_good_residuals = 2).
-  writer.OnPointsMarginalized({Point(0, 20, 10, 0.1, 3), Point(0, 30, 10, 0.2, 1)});
   // Its final pose moved 0.5 m backwards compared to what tracking thought.
-  writer.OnKeyframeMarginalized({0, Forward(-0.5), 0, 0});
+  Marginalize(&writer, 0, Forward(-0.5), {Point(0, 20, 10, 0.1, 3), Point(0, 30, 10, 0.2, 1)});
   EXPECT_EQ(writer.frames_written(), 2);
   ASSERT_TRUE(seen.count(0) && seen.count(1));
   // Keyframe: its own point at its own pixel, disparity fxB * idepth.
@@ -86,10 +105,7 @@ TEST(LabelWriter, WritesWhenKeyframesAreFinalWithFinalPoses) {
   EXPECT_NEAR(ReadKittiMapPng(out + "/000001.png").at<float>(10, 20), 100 * 0.5 / 9.0, 0.5 / 256);
 
   // A lost frame has no labels but still gets a file, in order.
-  vo::FrameEvent lost;
-  lost.frame_index = 2;
-  lost.status = vo::FrameStatus::kLost;
-  writer.OnFrameTracked(lost);
+  writer.OnFrameTracked(Lost(2));
   writer.OnFinished();
   EXPECT_EQ(writer.frames_written(), 3);
   EXPECT_EQ(cv::countNonZero(ReadKittiMapPng(out + "/000002.png")), 0);
@@ -103,10 +119,7 @@ TEST(LabelWriter, ResumeKeepsExistingFiles) {
   existing.at<float>(1, 1) = 42.f;
   WriteKittiMapPng(out + "/000000.png", existing);
   LabelWriter writer(Camera(), LabelOptions(), out);
-  vo::FrameEvent lost;
-  lost.frame_index = 0;
-  lost.status = vo::FrameStatus::kLost;
-  writer.OnFrameTracked(lost);
+  writer.OnFrameTracked(Lost(0));
   writer.OnFinished();
   EXPECT_FLOAT_EQ(ReadKittiMapPng(out + "/000000.png").at<float>(1, 1), 42.f);
 }
@@ -117,32 +130,77 @@ TEST(LabelWriter, LaterKeyframesAlsoLabelEarlierFrames) {
   LabelOptions options;
   options.future_keyframes = 1;
   LabelWriter writer(Camera(), options, out, [&](int i, const cv::Mat& m) { seen[i] = m.clone(); });
-  vo::WindowEvent w0;
-  w0.frame_index = 0;
-  w0.keyframes.push_back({0, Eigen::Isometry3d::Identity(), 0, 0});
-  writer.OnWindowOptimized(w0);
-  vo::FrameEvent f0;
-  f0.frame_index = 0;
-  f0.status = vo::FrameStatus::kKeyframe;
-  f0.reference_frame_index = 0;
-  writer.OnFrameTracked(f0);
+  writer.OnWindowOptimized(Window(0, {{0, Eigen::Isometry3d::Identity()}}));
+  writer.OnFrameTracked(Tracked(0, 0));
   // Keyframe 0 leaves without points: frame 0 must still wait for one later keyframe.
-  writer.OnPointsMarginalized({});
-  writer.OnKeyframeMarginalized({0, Eigen::Isometry3d::Identity(), 0, 0});
+  Marginalize(&writer, 0, Eigen::Isometry3d::Identity(), {});
   EXPECT_EQ(writer.frames_written(), 0);
   // Keyframe 1, 2 m ahead, hosts a point 10 m in front of it (12 m from frame 0).
-  vo::WindowEvent w1;
-  w1.frame_index = 1;
-  w1.keyframes.push_back({1, Forward(2.0), 0, 0});
-  writer.OnWindowOptimized(w1);
-  vo::FrameEvent f1 = f0;
-  f1.frame_index = 1;
-  f1.reference_frame_index = 1;
-  writer.OnFrameTracked(f1);
-  writer.OnPointsMarginalized({Point(1, 20, 10, 0.1, 3)});
-  writer.OnKeyframeMarginalized({1, Forward(2.0), 0, 0});
+  writer.OnWindowOptimized(Window(1, {{1, Forward(2.0)}}));
+  writer.OnFrameTracked(Tracked(1, 1));
+  Marginalize(&writer, 1, Forward(2.0), {Point(1, 20, 10, 0.1, 3)});
   writer.OnFinished();
   ASSERT_TRUE(seen.count(0) && seen.count(1));
   EXPECT_NEAR(seen[0].at<float>(10, 20), 100 * 0.5 / 12.0, 1e-5);
   EXPECT_FLOAT_EQ(seen[1].at<float>(10, 20), 100 * 0.5 * 0.1f);
+}
+
+TEST(LabelWriter, PastKeyframesLabelLaterFramesAndMemoryStaysBounded) {
+  const std::string out = TempDir() + "_past";
+  std::map<int, cv::Mat> seen;
+  LabelOptions options;
+  options.future_keyframes = 0;
+  options.past_keyframes = 2;
+  LabelWriter writer(Camera(), options, out, [&](int i, const cv::Mat& m) { seen[i] = m.clone(); });
+  // A sliding window of one keyframe per frame, moving 0.1 m per frame; keyframe k
+  // hosts one point 10 m ahead of it on the optical axis.
+  const int frames = 30;
+  int max_hosts = 0;
+  for (int k = 0; k < frames; ++k) {
+    writer.OnWindowOptimized(Window(k, {{k, Forward(0.1 * k)}}));
+    writer.OnFrameTracked(Tracked(k, k));
+    Marginalize(&writer, k, Forward(0.1 * k), {Point(k, 20, 10, 0.1, 3)});
+    max_hosts = std::max(max_hosts, writer.hosts_held());
+  }
+  writer.OnFinished();
+  ASSERT_EQ(static_cast<int>(seen.size()), frames);
+  // Frame 5 sees its own point (10 m) and those of keyframes 3 and 4 (9.8 m, 9.9 m), all
+  // on the optical axis: the nearest wins the pixel, the others are occluded.
+  EXPECT_NEAR(seen[5].at<float>(10, 20), 100 * 0.5 / 9.8, 1e-4);
+  EXPECT_EQ(cv::countNonZero(seen[5]), 1);
+  // Frame 0 has no past keyframes: only its own point.
+  EXPECT_FLOAT_EQ(seen[0].at<float>(10, 20), 100 * 0.5 * 0.1f);
+  // Held: the past keyframes and the one being written, independent of the sequence length.
+  EXPECT_LE(max_hosts, options.past_keyframes + 2);
+  EXPECT_EQ(writer.hosts_held(), 0);
+  EXPECT_EQ(writer.frames_pending(), 0);
+  EXPECT_GT(writer.counters().projected, 0);
+  EXPECT_EQ(writer.counters().frames, frames);
+}
+
+TEST(LabelWriter, ResetDropsOldMapKeyframes) {
+  const std::string out = TempDir() + "_reset";
+  std::map<int, cv::Mat> seen;
+  LabelOptions options;
+  options.future_keyframes = 3;
+  options.past_keyframes = 3;
+  LabelWriter writer(Camera(), options, out, [&](int i, const cv::Mat& m) { seen[i] = m.clone(); });
+  writer.OnWindowOptimized(Window(0, {{0, Eigen::Isometry3d::Identity()}}));
+  writer.OnFrameTracked(Tracked(0, 0));
+  Marginalize(&writer, 0, Eigen::Isometry3d::Identity(), {Point(0, 20, 10, 0.1, 3)});
+  writer.OnReset(1);
+  // The new map's keyframe 2 sits at the same world origin but must not label frame 0,
+  // and keyframe 0 (old map) must not label frame 2.
+  writer.OnFrameTracked(Lost(1));
+  writer.OnWindowOptimized(Window(2, {{2, Eigen::Isometry3d::Identity()}}));
+  writer.OnFrameTracked(Tracked(2, 2));
+  Marginalize(&writer, 2, Eigen::Isometry3d::Identity(), {Point(2, 30, 10, 0.2, 3)});
+  writer.OnFinished();
+  ASSERT_EQ(seen.size(), 3u);
+  EXPECT_EQ(cv::countNonZero(seen[0]), 1);
+  EXPECT_GT(seen[0].at<float>(10, 20), 0.f);
+  EXPECT_EQ(cv::countNonZero(seen[1]), 0);
+  EXPECT_EQ(cv::countNonZero(seen[2]), 1);
+  EXPECT_GT(seen[2].at<float>(10, 30), 0.f);
+  EXPECT_EQ(writer.hosts_held(), 0);
 }

@@ -1,0 +1,141 @@
+// Stereo label check on synthetic rectified pairs: correct labels on unique
+// texture survive, wrong ones and ambiguous (periodic) ones do not, and the
+// fast checker (box-filtered window statistics, row correlation) decides
+// exactly like the straightforward reference.
+#include <gtest/gtest.h>
+
+#include <opencv2/imgproc.hpp>
+#include <random>
+
+#include "core/error.h"
+#include "sdso_labels/stereo_check.h"
+
+using namespace dvso;
+using namespace dvso::labels;
+
+namespace {
+
+// Smooth random texture (unique everywhere at window scale).
+cv::Mat RandomTexture(int rows, int cols, unsigned seed) {
+  cv::Mat noise(rows, cols, CV_32F);
+  cv::RNG rng(seed);
+  rng.fill(noise, cv::RNG::UNIFORM, 0, 255);
+  cv::GaussianBlur(noise, noise, cv::Size(0, 0), 1.0);
+  cv::normalize(noise, noise, 20, 235, cv::NORM_MINMAX);
+  cv::Mat out;
+  noise.convertTo(out, CV_8U);
+  return out;
+}
+
+// Right image of a fronto-parallel plane at constant disparity: right(x) = left(x + d).
+cv::Mat ShiftedRight(const cv::Mat& left, int disparity) {
+  cv::Mat right(left.size(), CV_8U, cv::Scalar(128));
+  left.colRange(disparity, left.cols).copyTo(right.colRange(0, left.cols - disparity));
+  return right;
+}
+
+cv::Mat SingleLabel(const cv::Size& size, int x, int y, float disparity) {
+  cv::Mat labels(size, CV_32F, cv::Scalar(0));
+  labels.at<float>(y, x) = disparity;
+  return labels;
+}
+
+}  // namespace
+
+TEST(StereoCheck, KeepsCorrectAndRejectsWrongLabels) {
+  const cv::Mat left = RandomTexture(60, 160, 1);
+  const cv::Mat right = ShiftedRight(left, 12);
+  StereoCheckOptions options;
+  StereoLabelChecker checker(left, right, options);
+  EXPECT_TRUE(checker.Keep(100, 30, 12.0f));
+  EXPECT_TRUE(checker.Keep(100, 30, 12.3f));   // within max_offset of the match
+  EXPECT_FALSE(checker.Keep(100, 30, 13.0f));  // 1 px off
+  EXPECT_FALSE(checker.Keep(100, 30, 30.0f));
+  EXPECT_FALSE(checker.Keep(1, 30, 12.0f));    // window leaves the image
+  EXPECT_FALSE(checker.Keep(8, 30, 12.0f));    // match would lie left of the right image
+  cv::Mat labels = SingleLabel(left.size(), 100, 30, 12.0f);
+  EXPECT_EQ(VerifyLabelsWithStereo(left, right, options, &labels), 1);
+  labels = SingleLabel(left.size(), 100, 30, 14.0f);
+  EXPECT_EQ(VerifyLabelsWithStereo(left, right, options, &labels), 0);
+  EXPECT_EQ(labels.at<float>(30, 100), 0.f);
+}
+
+TEST(StereoCheck, RejectsPeriodicTextureAndTexturelessWindows) {
+  // Vertical stripes with an 8 px period: the match at the right disparity is
+  // exact, but so are the ones 8 px away -> not unique.
+  cv::Mat left(40, 160, CV_8U);
+  for (int y = 0; y < left.rows; ++y) {
+    for (int x = 0; x < left.cols; ++x) left.at<uchar>(y, x) = static_cast<uchar>(128 + 80 * std::sin(x * CV_PI / 4));
+  }
+  const cv::Mat right = ShiftedRight(left, 10);
+  StereoLabelChecker checker(left, right, StereoCheckOptions());
+  EXPECT_FALSE(checker.Keep(100, 20, 10.0f));
+  EXPECT_FALSE(checker.Keep(100, 20, 18.0f));  // an equally good alias
+  // Without the uniqueness gap an exact match is accepted.
+  StereoCheckOptions no_uniqueness;
+  no_uniqueness.min_cost_gap = 0;
+  no_uniqueness.left_right_check = false;
+  no_uniqueness.max_offset = no_uniqueness.exclusion = 20;
+  StereoLabelChecker lenient(left, right, no_uniqueness);
+  EXPECT_TRUE(lenient.Keep(100, 20, 10.0f));
+
+  const cv::Mat flat(40, 160, CV_8U, cv::Scalar(90));
+  StereoLabelChecker flat_checker(flat, flat, StereoCheckOptions());
+  EXPECT_FALSE(flat_checker.Keep(100, 20, 5.0f));
+}
+
+TEST(StereoCheck, RejectsOccludedBackgroundKeepsVisibleSurfaces) {
+  // Background at disparity 8, a foreground square at disparity 20 covering
+  // right-image columns [60, 90) (left columns [80, 110)). Left pixels just
+  // left of the square see background that is hidden in the right image.
+  const cv::Mat background = RandomTexture(60, 200, 2);
+  const cv::Mat foreground = RandomTexture(60, 200, 3);
+  cv::Mat left = background.clone();
+  cv::Mat right = ShiftedRight(background, 8);
+  foreground(cv::Rect(80, 10, 30, 40)).copyTo(left(cv::Rect(80, 10, 30, 40)));
+  foreground(cv::Rect(80, 10, 30, 40)).copyTo(right(cv::Rect(60, 10, 30, 40)));
+  StereoCheckOptions options;
+  StereoLabelChecker checker(left, right, options);
+  EXPECT_TRUE(checker.Keep(95, 30, 20.0f));  // foreground
+  EXPECT_TRUE(checker.Keep(40, 30, 8.0f));   // visible background
+  // Left x = 74: its background match x = 66 lies under the foreground in the right image.
+  EXPECT_FALSE(checker.Keep(74, 30, 8.0f));
+}
+
+TEST(StereoCheck, FastCheckerAgreesWithReference) {
+  const cv::Mat left = RandomTexture(80, 240, 4);
+  // A slanted surface: disparity grows with the row (10 .. 25 px), plus random labels.
+  cv::Mat right(left.size(), CV_8U);
+  for (int y = 0; y < left.rows; ++y) {
+    const int d = 10 + (15 * y) / left.rows;
+    for (int x = 0; x < left.cols; ++x) right.at<uchar>(y, x) = left.at<uchar>(y, std::min(left.cols - 1, x + d));
+  }
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> any_disparity(0.5f, 60.f);
+  cv::Mat labels(left.size(), CV_32F, cv::Scalar(0));
+  for (int y = 0; y < left.rows; y += 2) {
+    for (int x = 0; x < left.cols; x += 3) {
+      const bool correct = (x + y) % 2 == 0;
+      labels.at<float>(y, x) = correct ? 10 + (15 * y) / left.rows : any_disparity(rng);
+    }
+  }
+  StereoCheckOptions options;
+  cv::Mat fast = labels.clone(), reference = labels.clone();
+  const int kept_fast = VerifyLabelsWithStereo(left, right, options, &fast);
+  const int kept_reference = VerifyLabelsWithStereoReference(left, right, options, &reference);
+  EXPECT_GT(kept_reference, 300);  // the correct labels away from the borders survive
+  EXPECT_LT(kept_reference, cv::countNonZero(labels) * 3 / 4);
+  // Float rounding may flip a decision exactly at a threshold, nothing more.
+  EXPECT_NEAR(kept_fast, kept_reference, 2);
+  EXPECT_LE(cv::countNonZero(fast != reference), 2);
+}
+
+TEST(StereoCheck, OptionsAreChecked) {
+  StereoCheckOptions bad;
+  bad.max_offset = 3;
+  bad.exclusion = 2;
+  EXPECT_THROW(bad.Check(), Error);
+  const cv::Mat left(20, 40, CV_8U, cv::Scalar(0));
+  const cv::Mat colour(20, 40, CV_8UC3);
+  EXPECT_THROW(StereoLabelChecker(left, colour, StereoCheckOptions()), Error);
+}
