@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <Eigen/Eigenvalues>
+#include <algorithm>
 
 #include "tests/vo/test_backend_util.h"
 #include "vo/optimization/accumulator.h"
@@ -218,9 +220,102 @@ TEST(BackendMarginalization, KeyframeThatLostItsPointsLeavesFirst) {
   auto sw = testing::BuildSceneWindow(options, spec);
   EXPECT_TRUE(sw.window->KeyframesToMarginalize().empty());  // 4 < 7: nothing to do
   sw.window->mutable_keyframes()[1].points.clear();          // lost all its points
+  // DSO keeps at least setting_minFrames (5) keyframes: with 4 nothing leaves yet.
+  EXPECT_TRUE(sw.window->KeyframesToMarginalize().empty());
+  options.min_keyframes_kept = 3;
+  sw.window->SetOptions(options);
   const std::vector<int> ids = sw.window->KeyframesToMarginalize();
   ASSERT_EQ(ids.size(), 1u);
   EXPECT_EQ(ids[0], sw.window->keyframe(1).id);
+}
+
+TEST(BackendMarginalization, KeyframeWithFarBrightnessLeaves) {
+  WindowOptions options;
+  options.min_keyframes_kept = 3;
+  SceneWindowSpec spec;
+  spec.num_keyframes = 4;
+  spec.num_hosts = 3;
+  spec.grid_step = 24;
+  auto sw = testing::BuildSceneWindow(options, spec);
+  EXPECT_TRUE(sw.window->KeyframesToMarginalize().empty());
+  sw.window->mutable_keyframes()[2].a = 1.5 * options.max_log_affine_in_window;  // e^a: far darker/brighter
+  const std::vector<int> ids = sw.window->KeyframesToMarginalize();
+  ASSERT_EQ(ids.size(), 1u);
+  EXPECT_EQ(ids[0], sw.window->keyframe(2).id);
+}
+
+// Regression (stereo scale run-away on long KITTI-like runs): a stereo point's
+// static stereo residual never leaves the image, so without DSO's rule the
+// point - and with it its keyframe - stayed in the window forever, and
+// long-gone keyframes kept constraining the current ones. Points no longer
+// seen by the newest keyframe must leave, carrying their information into the
+// prior, so that their keyframe gets marginalised.
+TEST(BackendMarginalization, StereoPointsUnseenByNewestKeyframeLeave) {
+  WindowOptions options;
+  options.min_keyframes_kept = 3;
+  SceneWindowSpec spec;
+  spec.num_keyframes = 4;
+  spec.num_hosts = 3;
+  spec.grid_step = 20;
+  spec.stereo = true;
+  auto sw = testing::BuildSceneWindow(options, spec);
+  Window& w = *sw.window;
+  w.Optimize(2);
+  w.RemoveOutliers();
+  const int newest = w.keyframe(3).id;
+  const size_t host0_points = w.keyframe(0).points.size();
+  const size_t host1_points = w.keyframe(1).points.size();
+  ASSERT_GT(host0_points, 20u);
+  ASSERT_GT(host1_points, 20u);
+  // Keyframe 0's points are no longer observed by the newest keyframe (e.g.
+  // they left its field of view): their residuals into it are gone.
+  size_t with_stereo = 0;
+  for (Point& p : w.mutable_keyframes()[0].points) {
+    p.residuals.erase(std::remove_if(p.residuals.begin(), p.residuals.end(),
+                                     [&](const Residual& r) { return r.target_id == newest; }),
+                      p.residuals.end());
+    for (const Residual& r : p.residuals) with_stereo += r.kind == ResidualKind::kStaticStereo;
+  }
+  ASSERT_GT(with_stereo, host0_points / 2);  // these would live on through their static stereo residual
+  // A few points of keyframes 1 and 2 already left the newest image (their
+  // residual into it was removed): they leave too; the others stay.
+  std::vector<size_t> seen(3, 0);
+  for (int h = 1; h < 3; ++h) {
+    for (const Point& p : w.keyframe(h).points) {
+      for (const Residual& r : p.residuals) seen[h] += r.target_id == newest;
+    }
+  }
+  ASSERT_GT(seen[1], host1_points / 2);
+  const size_t expected_leaving = w.num_points() - seen[1] - seen[2] - w.keyframe(3).points.size();
+  const double prior_trace_before = w.prior_hessian().trace();
+  const std::vector<MarginalizedPoint> left = w.MarginalizeInvisiblePoints();
+  EXPECT_EQ(left.size(), expected_leaving);
+  int from_host0 = 0;
+  for (const MarginalizedPoint& m : left) from_host0 += m.host_id == w.keyframe(0).id;
+  EXPECT_EQ(from_host0, static_cast<int>(host0_points));
+  EXPECT_TRUE(w.keyframe(0).points.empty());
+  EXPECT_EQ(w.keyframe(1).points.size(), seen[1]);
+  EXPECT_EQ(w.keyframe(2).points.size(), seen[2]);
+  // Their information went into the prior (and fixed the linearisation points).
+  EXPECT_GT(w.prior_hessian().trace(), prior_trace_before + 1.0);
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(w.prior_hessian());
+  EXPECT_GE(eig.eigenvalues().minCoeff(), -1e-6 * eig.eigenvalues().maxCoeff());
+  EXPECT_TRUE(w.keyframe(0).fej_fixed);
+  // The keyframe without points now leaves first.
+  const std::vector<int> ids = w.KeyframesToMarginalize();
+  ASSERT_EQ(ids.size(), 1u);
+  EXPECT_EQ(ids[0], w.keyframe(0).id);
+  // The window still sits at the truth after optimising with the new prior
+  // (the marginalised information is consistent).
+  w.MarginalizeKeyframe(ids[0]);
+  const OptimizationSummary s = w.Optimize(4);
+  EXPECT_LE(s.final_energy, s.initial_energy);
+  for (int i = 0; i < w.num_keyframes(); ++i) {
+    const Keyframe& kf = w.keyframe(i);
+    const int true_index = kf.id / 10;
+    const Eigen::Isometry3d err = kf.world_to_camera * sw.true_world_to_camera[true_index].inverse();
+    EXPECT_LT(err.translation().norm(), 0.01) << "keyframe " << kf.id;
+  }
 }
 
 }  // namespace

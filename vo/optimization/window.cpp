@@ -22,6 +22,8 @@ void WindowOptions::Check() const {
   Require(convergence_step > 0, "window: convergence_step must be > 0");
   Require(min_relative_decrease >= 0, "window: min_relative_decrease must be >= 0");
   Require(min_residuals_to_marginalize >= 1, "window: min_residuals_to_marginalize must be >= 1");
+  Require(max_log_affine_in_window > 0, "window: max_log_affine_in_window must be > 0");
+  Require(min_keyframes_kept >= 1, "window: min_keyframes_kept must be >= 1");
   Require(num_threads >= 1 && num_threads <= 64, "window: num_threads must be in [1, 64]");
 }
 

@@ -35,6 +35,8 @@
 
 namespace dvso::vo {
 
+struct PointRef;  // accumulator.h
+
 struct WindowOptions {
   int max_keyframes = 7;                // active keyframes N (paper: 7); marginalisation keeps it
   double huber_threshold = 9.0;         // gamma of the Huber norm, intensity units (DSO setting_huberTH)
@@ -55,6 +57,8 @@ struct WindowOptions {
   double convergence_step = 1e-5;       // stop when the frame update norm (and RMS relative depth update) falls below this
   double min_relative_decrease = 1e-4;  // stop when an accepted step lowers the energy by less than this fraction
   int min_residuals_to_marginalize = 1; // hosted points with fewer good temporal residuals are dropped, not marginalised
+  double max_log_affine_in_window = 0.7; // keyframes whose brightness differs from the newest by more than this (|a_i - a_new|) leave (DSO setting_maxLogAffFacInWindow)
+  int min_keyframes_kept = 5;           // the "lost its points" / affine rules never leave fewer keyframes than this (DSO setting_minFrames)
   int num_threads = 1;                  // threads for linearisation/accumulation (1 or 2 are sensible)
 
   void Check() const;
@@ -175,10 +179,22 @@ class Window {
   // residual. Returns the number of removed points.
   int RemoveOutliers();
 
+  // Points that the newest keyframe no longer observes leave the window (DSO
+  // flagPointsForRemoval): a point hosted in an older keyframe without an
+  // active temporal residual into the newest one (it projects outside it, is
+  // occluded there, or was an outlier) is marginalised into the prior when it
+  // has at least min_residuals_to_marginalize active temporal residuals, else
+  // dropped. Without this, stereo points (whose static stereo residual never
+  // leaves the image) would stay forever and pin long-gone keyframes in the
+  // window. Call after Optimize() + RemoveOutliers(). Returns the points that left.
+  std::vector<MarginalizedPoint> MarginalizeInvisiblePoints();
+
   // Keyframes DSO would marginalise now, never the newest: those that kept
-  // fewer than 5 % of their points, then (distance heuristic of DSO) as many
-  // as needed so that at most max_keyframes - 1 remain, leaving room for the
-  // next keyframe. Call after Optimize() of a new keyframe (DSO order).
+  // fewer than 5 % of their points or whose brightness differs too much from
+  // the newest (while more than min_keyframes_kept remain), then (distance
+  // heuristic of DSO) as many as needed so that at most max_keyframes - 1
+  // remain, leaving room for the next keyframe. Call after Optimize() of a
+  // new keyframe (DSO order).
   std::vector<int> KeyframesToMarginalize() const;
   // Marginalises keyframe `id`: its points (those with enough good residuals)
   // go into the prior through the Schur complement, then the keyframe's
@@ -211,6 +227,11 @@ class Window {
 
  private:
   void AddResidualsForPoint(const Keyframe& host, Point* point) const;
+  // Describes point `point_index` of keyframe `host_index` as it leaves; counts its good temporal residuals.
+  MarginalizedPoint DescribeLeavingPoint(int host_index, int point_index) const;
+  // Schur-complements the given points (depths eliminated, linearised at the
+  // current state) into the prior and fixes the linearisation points they touch.
+  void MarginalizePointsIntoPrior(const std::vector<PointRef>& points);
 
   WindowOptions options_;
   StereoCamera camera_;

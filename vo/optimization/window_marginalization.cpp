@@ -19,6 +19,81 @@
 
 namespace dvso::vo {
 
+MarginalizedPoint Window::DescribeLeavingPoint(int host_index, int point_index) const {
+  const Keyframe& host = keyframes_[host_index];
+  const Point& p = host.points[point_index];
+  MarginalizedPoint out;
+  int active = 0;
+  for (const Residual& r : p.residuals) {
+    if (r.state != ResidualState::kActive) continue;
+    out.num_residuals += r.kind == ResidualKind::kTemporal;
+    ++active;
+    out.mean_energy += r.energy;
+    if (r.kind == ResidualKind::kStaticStereo) out.stereo_energy = r.energy;
+  }
+  if (active > 0) out.mean_energy /= active;
+  out.idepth_hessian = p.idepth_hessian;
+  out.idepth_hessian_temporal = p.idepth_hessian_temporal;
+  out.host_id = host.id;
+  out.u = p.u;
+  out.v = p.v;
+  out.idepth = p.idepth;
+  const Eigen::Vector3d ray = camera_.left.Unproject(p.u, p.v);
+  out.world = host.world_to_camera.inverse() * (ray / std::max(p.idepth, options_.min_idepth));
+  return out;
+}
+
+void Window::MarginalizePointsIntoPrior(const std::vector<PointRef>& points) {
+  if (points.empty()) return;
+  // Their information on the frames, depths eliminated (Schur), linearised
+  // at the current state, re-expanded around the first estimates.
+  WindowLinearizer linearizer(&keyframes_, camera_, options_);
+  linearizer.Linearize(points);
+  Eigen::MatrixXd H;
+  Eigen::VectorXd b;
+  linearizer.Reduce(0.0, Eigen::MatrixXd(), Eigen::VectorXd(), &H, &b);
+  AddToPrior(H, b, FirstEstimateDifference(keyframes_), &prior_H_, &prior_b_);
+}
+
+std::vector<MarginalizedPoint> Window::MarginalizeInvisiblePoints() {
+  std::vector<MarginalizedPoint> leaving;
+  if (num_keyframes() < 2) return leaving;
+  const int newest_id = keyframes_.back().id;
+  // Residual states at the current estimate (Optimize() leaves them current).
+  if (!residual_states_current_) EvaluateWindowEnergy(&keyframes_, camera_, options_, true);
+  SyncFreeLinearizationPoints(&keyframes_);
+  std::vector<PointRef> informative;
+  std::vector<std::vector<uint8_t>> leaves(keyframes_.size());
+  for (int h = 0; h + 1 < num_keyframes(); ++h) {
+    const Keyframe& host = keyframes_[h];
+    leaves[h].assign(host.points.size(), 0);
+    for (int i = 0; i < static_cast<int>(host.points.size()); ++i) {
+      const Point& p = host.points[i];
+      bool seen_by_newest = false;
+      for (const Residual& r : p.residuals) {
+        seen_by_newest |= r.kind == ResidualKind::kTemporal && r.target_id == newest_id &&
+                          r.state == ResidualState::kActive;
+      }
+      if (seen_by_newest) continue;
+      leaves[h][i] = 1;
+      leaving.push_back(DescribeLeavingPoint(h, i));
+      if (leaving.back().num_residuals >= options_.min_residuals_to_marginalize) informative.push_back({h, i});
+    }
+  }
+  if (leaving.empty()) return leaving;
+  MarginalizePointsIntoPrior(informative);
+  FixConnectedLinearizationPoints(prior_H_, &keyframes_);
+  for (int h = 0; h + 1 < num_keyframes(); ++h) {
+    std::vector<Point>& points = keyframes_[h].points;
+    size_t k = 0;
+    for (size_t i = 0; i < points.size(); ++i) {
+      if (!leaves[h][i]) points[k++] = std::move(points[i]);
+    }
+    points.resize(k);
+  }
+  return leaving;
+}
+
 std::vector<MarginalizedPoint> Window::MarginalizeKeyframe(int id) {
   int index = -1;
   for (int i = 0; i < num_keyframes(); ++i) {
@@ -38,39 +113,11 @@ std::vector<MarginalizedPoint> Window::MarginalizeKeyframe(int id) {
     probe.Linearize(hosted);
     std::vector<PointRef> informative;
     for (const PointRef& ref : hosted) {
-      const Point& p = keyframes_[index].points[ref.point_index];
-      int good = 0, active = 0;
-      MarginalizedPoint out;
-      for (const Residual& r : p.residuals) {
-        if (r.state != ResidualState::kActive) continue;
-        good += r.kind == ResidualKind::kTemporal;
-        ++active;
-        out.mean_energy += r.energy;
-        if (r.kind == ResidualKind::kStaticStereo) out.stereo_energy = r.energy;
-      }
-      if (active > 0) out.mean_energy /= active;
-      out.idepth_hessian = p.idepth_hessian;
-      out.idepth_hessian_temporal = p.idepth_hessian_temporal;
-      out.host_id = id;
-      out.u = p.u;
-      out.v = p.v;
-      out.idepth = p.idepth;
-      out.num_residuals = good;
-      const Eigen::Vector3d ray = camera_.left.Unproject(p.u, p.v);
-      out.world = keyframes_[index].world_to_camera.inverse() * (ray / std::max(p.idepth, options_.min_idepth));
-      leaving.push_back(out);
-      if (good >= options_.min_residuals_to_marginalize) informative.push_back(ref);
+      leaving.push_back(DescribeLeavingPoint(index, ref.point_index));
+      if (leaving.back().num_residuals >= options_.min_residuals_to_marginalize) informative.push_back(ref);
     }
-    // 2. Their information on the frames, depths eliminated (Schur), linearised
-    //    at the current state, re-expanded around the first estimates.
-    if (!informative.empty()) {
-      WindowLinearizer linearizer(&keyframes_, camera_, options_);
-      linearizer.Linearize(informative);
-      Eigen::MatrixXd H;
-      Eigen::VectorXd b;
-      linearizer.Reduce(0.0, Eigen::MatrixXd(), Eigen::VectorXd(), &H, &b);
-      AddToPrior(H, b, FirstEstimateDifference(keyframes_), &prior_H_, &prior_b_);
-    }
+    // 2. Their information on the frames goes into the prior.
+    MarginalizePointsIntoPrior(informative);
   }
 
   // 3. The leaving keyframe's own absolute priors (gauge, affine) join the prior.
@@ -113,10 +160,13 @@ std::vector<int> Window::KeyframesToMarginalize() const {
   if (n < 2) return result;
   std::vector<bool> flagged(n, false);
   int remaining = n;
-  // Keyframes that lost almost all their points (DSO: < 5 % left).
-  for (int i = 0; i + 1 < n; ++i) {
+  // Keyframes that lost almost all their points (DSO: < 5 % left), or whose
+  // brightness drifted too far from the newest's (DSO setting_maxLogAffFacInWindow).
+  const double newest_a = keyframes_.back().a;
+  for (int i = 0; i + 1 < n && remaining > options_.min_keyframes_kept; ++i) {
     const Keyframe& kf = keyframes_[i];
-    if (kf.num_points_added > 0 && kf.points.size() < 0.05 * kf.num_points_added) {
+    if ((kf.num_points_added > 0 && kf.points.size() < 0.05 * kf.num_points_added) ||
+        std::abs(kf.a - newest_a) > options_.max_log_affine_in_window) {
       flagged[i] = true;
       --remaining;
     }

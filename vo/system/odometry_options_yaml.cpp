@@ -101,6 +101,8 @@ void VisitFields(Options& o, Visitor&& v) {
   v("window", "convergence_step", o.window.convergence_step);
   v("window", "min_relative_decrease", o.window.min_relative_decrease);
   v("window", "min_residuals_to_marginalize", o.window.min_residuals_to_marginalize);
+  v("window", "max_log_affine_in_window", o.window.max_log_affine_in_window);
+  v("window", "min_keyframes_kept", o.window.min_keyframes_kept);
   v("window", "num_threads", o.window.num_threads);
 }
 

@@ -59,6 +59,8 @@ class System {
   void AddCandidates(int keyframe_id, const ImagePyramid& left, const ImagePyramid* right);
   void RunOptimization(FrameEvent* event);
   void MarginalizeKeyframes();
+  // Sends points that left the window (marginalised or dropped) to the observers.
+  void ReportMarginalizedPoints(const std::vector<MarginalizedPoint>& leaving) const;
   void SetTrackingReference(int keyframe_id);
   void EmitWindowEvent(int frame_index);
   void ResetAfterLoss(int frame_index, const Eigen::Isometry3d& predicted);

@@ -154,6 +154,9 @@ void System::RunOptimization(FrameEvent* event) {
   const auto start = std::chrono::steady_clock::now();
   window_->Optimize(options_.optimization_iterations);
   window_->RemoveOutliers();
+  // Points the new keyframe no longer sees leave the window (DSO), so that
+  // keyframes whose points are gone get marginalised.
+  ReportMarginalizedPoints(window_->MarginalizeInvisiblePoints());
   event->optimize_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
 
@@ -179,32 +182,34 @@ PointInfo System::MakePointInfo(const Keyframe& host, const Point& point) const 
   return info;
 }
 
+void System::ReportMarginalizedPoints(const std::vector<MarginalizedPoint>& leaving) const {
+  if (observers_.empty() || leaving.empty()) return;
+  std::vector<PointInfo> points;
+  points.reserve(leaving.size());
+  for (const MarginalizedPoint& m : leaving) {
+    PointInfo p;
+    p.host_frame_index = m.host_id;
+    p.u = m.u;
+    p.v = m.v;
+    p.idepth = m.idepth;
+    p.world = m.world;
+    p.num_good_residuals = m.num_residuals;
+    p.num_residuals = m.num_residuals;
+    p.idepth_hessian = m.idepth_hessian;
+    p.mean_energy = m.mean_energy;
+    p.stereo_energy = m.stereo_energy;
+    points.push_back(p);
+  }
+  for (OdometryObserver* o : observers_) o->OnPointsMarginalized(points);
+}
+
 void System::MarginalizeKeyframes() {
   for (int id : window_->KeyframesToMarginalize()) {
     const Keyframe* kf = window_->FindKeyframe(id);
     if (kf == nullptr) continue;
     const KeyframeInfo info{id, kf->world_to_camera.inverse(), kf->a, kf->b};
-    const std::vector<MarginalizedPoint> leaving = window_->MarginalizeKeyframe(id);
-    if (!observers_.empty()) {
-      std::vector<PointInfo> points;
-      points.reserve(leaving.size());
-      for (const MarginalizedPoint& m : leaving) {
-        PointInfo p;
-        p.host_frame_index = m.host_id;
-        p.u = m.u;
-        p.v = m.v;
-        p.idepth = m.idepth;
-        p.world = m.world;
-        p.num_good_residuals = m.num_residuals;
-        p.num_residuals = m.num_residuals;
-        p.idepth_hessian = m.idepth_hessian;
-        p.mean_energy = m.mean_energy;
-        p.stereo_energy = m.stereo_energy;
-        points.push_back(p);
-      }
-      for (OdometryObserver* o : observers_) o->OnPointsMarginalized(points);
-      for (OdometryObserver* o : observers_) o->OnKeyframeMarginalized(info);
-    }
+    ReportMarginalizedPoints(window_->MarginalizeKeyframe(id));
+    for (OdometryObserver* o : observers_) o->OnKeyframeMarginalized(info);
     candidates_.erase(std::remove_if(candidates_.begin(), candidates_.end(),
                                      [id](const KeyframeCandidates& c) { return c.keyframe_id == id; }),
                       candidates_.end());
