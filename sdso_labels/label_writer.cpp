@@ -181,9 +181,11 @@ void LabelWriter::Write(const PendingFrame& frame) {
     }
     counters_.projected += RenderLabelMap(points, T_world_frame, camera_, options_.projection, &labels);
     if (loader_ && options_.stereo_check.enabled) {
+      const auto check_start = std::chrono::steady_clock::now();
       cv::Mat left, right;
       loader_(frame.frame_index, &left, &right);
       VerifyLabelsWithStereo(left, right, options_.stereo_check, &labels);
+      counters_.check_ms += MsSince(check_start);
     }
   }
   const int kept = cv::countNonZero(labels);

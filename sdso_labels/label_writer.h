@@ -60,6 +60,7 @@ struct LabelWriterCounters {
   long projected = 0;      // labels after projection and occlusion handling
   long verified = 0;       // labels kept by the stereo check (= written)
   double extract_ms = 0;   // projection + stereo check
+  double check_ms = 0;     // the stereo check alone (part of extract_ms)
   double write_ms = 0;     // PNG encoding and writing
 };
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <opencv2/imgproc.hpp>
 #include <vector>
 
@@ -66,27 +67,74 @@ double SubPixelMinimum(const std::vector<float>& costs, int best) {
 constexpr float kNoMatch = 2.0f;      // cost of a window without texture (1 - ZNCC is in [0, 2])
 constexpr float kMinVariance = 1e-3f;  // windows with less intensity variance are textureless
 
-// Window means and norms sqrt(sum (I - mean)^2) of every pixel (border
-// pixels are never queried); sums in double so the variance keeps its digits.
-void WindowMeanAndNorm(const cv::Mat& image, int r, cv::Mat* mean, cv::Mat* norm) {
-  cv::Mat image64, sum, sum_sq;
-  image.convertTo(image64, CV_64F);
+// Window means (centred around 0, as the float images) and norms
+// sqrt(sum (I - mean)^2) of every pixel of an 8-bit image; the sums are exact
+// integers (border pixels are never queried).
+void WindowMeanAndNorm(const cv::Mat& image8, int r, cv::Mat* mean, cv::Mat* norm) {
+  cv::Mat squares, sum, sum_sq;
+  image8.convertTo(squares, CV_16U);
+  squares = squares.mul(squares);  // <= 255^2, fits in 16 bits
   const cv::Size window(2 * r + 1, 2 * r + 1);
-  cv::boxFilter(image64, sum, CV_64F, window, cv::Point(-1, -1), false, cv::BORDER_REPLICATE);
-  cv::boxFilter(image64.mul(image64), sum_sq, CV_64F, window, cv::Point(-1, -1), false, cv::BORDER_REPLICATE);
-  const double n = window.area();
-  *mean = cv::Mat(image.size(), CV_32F);
-  *norm = cv::Mat(image.size(), CV_32F);
-  for (int y = 0; y < image.rows; ++y) {
-    const double* s = sum.ptr<double>(y);
-    const double* q = sum_sq.ptr<double>(y);
+  cv::boxFilter(image8, sum, CV_32S, window, cv::Point(-1, -1), false, cv::BORDER_REPLICATE);
+  cv::boxFilter(squares, sum_sq, CV_32S, window, cv::Point(-1, -1), false, cv::BORDER_REPLICATE);
+  const int n = window.area();
+  *mean = cv::Mat(image8.size(), CV_32F);
+  *norm = cv::Mat(image8.size(), CV_32F);
+  // n * sum (I - mean)^2 = n * sum I^2 - (sum I)^2: both terms are below
+  // n^2 * 255^2, i.e. exact in 32-bit integers up to 13x13 windows.
+  const bool fits_int32 = static_cast<int64_t>(n) * n * 255 * 255 < (int64_t{1} << 31);
+  const float inv_n = 1.0f / n;
+  for (int y = 0; y < image8.rows; ++y) {
+    const int* s = sum.ptr<int>(y);
+    const int* q = sum_sq.ptr<int>(y);
     float* m = mean->ptr<float>(y);
     float* v = norm->ptr<float>(y);
-    for (int x = 0; x < image.cols; ++x) {
-      m[x] = static_cast<float>(s[x] / n);
-      v[x] = static_cast<float>(std::sqrt(std::max(0.0, q[x] - s[x] * s[x] / n)));
+    for (int x = 0; x < image8.cols; ++x) m[x] = static_cast<float>(s[x]) * inv_n - 128.0f;
+    if (fits_int32) {
+      for (int x = 0; x < image8.cols; ++x) {
+        const int scaled = n * q[x] - s[x] * s[x];
+        v[x] = std::sqrt(static_cast<float>(scaled) * inv_n);
+      }
+    } else {
+      for (int x = 0; x < image8.cols; ++x) {
+        const int64_t scaled = static_cast<int64_t>(n) * q[x] - static_cast<int64_t>(s[x]) * s[x];
+        v[x] = static_cast<float>(std::sqrt(static_cast<double>(scaled) / n));
+      }
     }
   }
+}
+
+// cross[k] += sum_t weights[t] * other[k + t], k < n: one window row correlated
+// with every position of a row. kTaps is a compile-time constant so the tap
+// loop unrolls and the loop over k vectorises.
+template <int kTaps>
+void CorrelateRow(const float* weights, const float* other, int n, float* cross) {
+  for (int k = 0; k < n; ++k) {
+    float acc = 0.f;
+    for (int t = 0; t < kTaps; ++t) acc += weights[t] * other[k + t];
+    cross[k] += acc;
+  }
+}
+
+void CorrelateRowAnyTaps(const float* weights, int taps, const float* other, int n, float* cross) {
+  switch (taps) {
+    case 3: return CorrelateRow<3>(weights, other, n, cross);
+    case 5: return CorrelateRow<5>(weights, other, n, cross);
+    case 7: return CorrelateRow<7>(weights, other, n, cross);
+    case 9: return CorrelateRow<9>(weights, other, n, cross);
+    case 11: return CorrelateRow<11>(weights, other, n, cross);
+    default:
+      for (int k = 0; k < n; ++k) {
+        float acc = 0.f;
+        for (int t = 0; t < taps; ++t) acc += weights[t] * other[k + t];
+        cross[k] += acc;
+      }
+  }
+}
+
+// Index of the first smallest cost.
+int ArgMin(const std::vector<float>& costs) {
+  return static_cast<int>(std::min_element(costs.begin(), costs.end()) - costs.begin());
 }
 
 // The best match (discrete index `best`, sub-pixel `best_sub`) is good and
@@ -109,8 +157,8 @@ StereoLabelChecker::StereoLabelChecker(const cv::Mat& left8, const cv::Mat& righ
   options_.Check();
   left8.convertTo(left_, CV_32F, 1.0, -128.0);
   right8.convertTo(right_, CV_32F, 1.0, -128.0);
-  WindowMeanAndNorm(left_, options_.window_radius, &left_mean_, &left_norm_);
-  WindowMeanAndNorm(right_, options_.window_radius, &right_mean_, &right_norm_);
+  WindowMeanAndNorm(left8, options_.window_radius, &left_mean_, &left_norm_);
+  WindowMeanAndNorm(right8, options_.window_radius, &right_mean_, &right_norm_);
 }
 
 void StereoLabelChecker::ScanCosts(const cv::Mat& fixed, const cv::Mat& fixed_mean, const cv::Mat& fixed_norm,
@@ -123,22 +171,19 @@ void StereoLabelChecker::ScanCosts(const cv::Mat& fixed, const cv::Mat& fixed_me
   if (norm * norm <= kMinVariance) return;
   const float mean = fixed_mean.at<float>(y, x);
   cross_.assign(n, 0.f);
-  float* cross = cross_.data();
+  const int taps = 2 * r + 1;
+  weights_.resize(taps);
   // Cross-correlation of the centred fixed window with every window of the
   // other row: sum (f - mean_f) * o == sum (f - mean_f) * (o - mean_o).
   for (int dy = -r; dy <= r; ++dy) {
-    const float* f = fixed.ptr<float>(y + dy);
-    const float* o = other.ptr<float>(y + dy) + x_begin;
-    for (int dx = -r; dx <= r; ++dx) {
-      const float w = f[x + dx] - mean;
-      const float* od = o + dx;
-      for (int k = 0; k < n; ++k) cross[k] += w * od[k];
-    }
+    const float* f = fixed.ptr<float>(y + dy) + x - r;
+    for (int t = 0; t < taps; ++t) weights_[t] = f[t] - mean;
+    CorrelateRowAnyTaps(weights_.data(), taps, other.ptr<float>(y + dy) + x_begin - r, n, cross_.data());
   }
   const float* other_norm_row = other_norm.ptr<float>(y) + x_begin;
   for (int k = 0; k < n; ++k) {
     const float on = other_norm_row[k];
-    if (on * on > kMinVariance) (*costs)[k] = 1.0f - cross[k] / (norm * on);
+    if (on * on > kMinVariance) (*costs)[k] = 1.0f - cross_[k] / (norm * on);
   }
 }
 
@@ -148,11 +193,26 @@ bool StereoLabelChecker::Keep(int x, int y, float label) {
   // Every integer disparity whose right window fits in the image.
   const int max_d = std::min(x - r, options_.max_disparity);
   if (max_d < 0 || label > max_d + options_.max_offset) return false;
+  // Pre-test on a band of disparities around the label: if the best match
+  // inside the band misses the label, so does the best over the full range
+  // (which is either the same match or lies outside the band), so most wrong
+  // labels are rejected without the full scan.
+  const int band = static_cast<int>(std::ceil(options_.max_offset)) + 2;
+  const int band_low = std::max(0, static_cast<int>(std::floor(label)) - band);
+  const int band_high = std::min(max_d, static_cast<int>(std::ceil(label)) + band);
+  if (band_high - band_low < max_d) {
+    ScanCosts(left_, left_mean_, left_norm_, right_, right_norm_, x, y, x - band_high, x - band_low + 1, &back_costs_);
+    costs_.resize(band_high - band_low + 1);
+    for (int d = band_low; d <= band_high; ++d) costs_[d - band_low] = back_costs_[band_high - d];
+    const int band_best = ArgMin(costs_);
+    if (costs_[band_best] > options_.max_cost) return false;
+    if (std::abs(band_low + SubPixelMinimum(costs_, band_best) - label) > options_.max_offset) return false;
+  }
   // Right window centres x - max_d .. x; costs_[d] belongs to centre x - d.
   ScanCosts(left_, left_mean_, left_norm_, right_, right_norm_, x, y, x - max_d, x + 1, &back_costs_);
   costs_.resize(max_d + 1);
   for (int d = 0; d <= max_d; ++d) costs_[d] = back_costs_[max_d - d];
-  const int best = static_cast<int>(std::min_element(costs_.begin(), costs_.end()) - costs_.begin());
+  const int best = ArgMin(costs_);
   const double best_sub = SubPixelMinimum(costs_, best);
   if (std::abs(best_sub - label) > options_.max_offset) return false;
   if (!IsUnique(costs_, best, best_sub, options_)) return false;
@@ -162,8 +222,7 @@ bool StereoLabelChecker::Keep(int x, int y, float label) {
   const int max_back = std::min(left_.cols - 1 - r - xr, options_.max_disparity);
   if (xr < r || max_back < 0) return false;
   ScanCosts(right_, right_mean_, right_norm_, left_, left_norm_, xr, y, xr, xr + max_back + 1, &back_costs_);
-  const int back_best =
-      static_cast<int>(std::min_element(back_costs_.begin(), back_costs_.end()) - back_costs_.begin());
+  const int back_best = ArgMin(back_costs_);
   return std::abs(SubPixelMinimum(back_costs_, back_best) - best_sub) <= options_.max_offset;
 }
 

@@ -53,7 +53,7 @@ class StereoLabelChecker {
   cv::Mat left_, right_;            // CV_32F, centred around 0 (keeps float sums accurate)
   cv::Mat left_mean_, right_mean_;  // window means
   cv::Mat left_norm_, right_norm_;  // window norms sqrt(sum (I - mean)^2)
-  std::vector<float> cross_, costs_, back_costs_, centred_;
+  std::vector<float> cross_, costs_, back_costs_, weights_;
 };
 
 // Filters `labels` (CV_32F disparities, 0 = none) in place using the grey
