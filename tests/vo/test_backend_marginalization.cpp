@@ -296,6 +296,14 @@ TEST(BackendMarginalization, StereoPointsUnseenByNewestKeyframeLeave) {
   EXPECT_TRUE(w.keyframe(0).points.empty());
   EXPECT_EQ(w.keyframe(1).points.size(), seen[1]);
   EXPECT_EQ(w.keyframe(2).points.size(), seen[2]);
+  for (int h = 1; h < 3; ++h) {
+    for (const Point& p : w.keyframe(h).points) {  // the points that stay keep their residuals
+      int into_newest = 0;
+      for (const Residual& r : p.residuals) into_newest += r.target_id == newest;
+      EXPECT_EQ(into_newest, 1);
+      EXPECT_GE(p.residuals.size(), 2u);
+    }
+  }
   // Their information went into the prior (and fixed the linearisation points).
   EXPECT_GT(w.prior_hessian().trace(), prior_trace_before + 1.0);
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(w.prior_hessian());

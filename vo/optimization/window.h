@@ -180,13 +180,14 @@ class Window {
   int RemoveOutliers();
 
   // Points that the newest keyframe no longer observes leave the window (DSO
-  // flagPointsForRemoval): a point hosted in an older keyframe without an
-  // active temporal residual into the newest one (it projects outside it, is
-  // occluded there, or was an outlier) is marginalised into the prior when it
-  // has at least min_residuals_to_marginalize active temporal residuals, else
-  // dropped. Without this, stereo points (whose static stereo residual never
-  // leaves the image) would stay forever and pin long-gone keyframes in the
-  // window. Call after Optimize() + RemoveOutliers(). Returns the points that left.
+  // flagPointsForRemoval / isOOB): a point hosted in an older keyframe whose
+  // residual into the newest keyframe is out of bounds (or missing), or an
+  // outlier there and in the previous keyframe too, is marginalised into the
+  // prior when it has at least min_residuals_to_marginalize active temporal
+  // residuals, else dropped. Without this, stereo points (whose static stereo
+  // residual never leaves the image) would stay forever and pin long-gone
+  // keyframes in the window. Call after Optimize() and before
+  // RemoveOutliers() (it needs the residual states). Returns the points that left.
   std::vector<MarginalizedPoint> MarginalizeInvisiblePoints();
 
   // Keyframes DSO would marginalise now, never the newest: those that kept

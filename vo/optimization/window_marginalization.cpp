@@ -57,24 +57,34 @@ void Window::MarginalizePointsIntoPrior(const std::vector<PointRef>& points) {
 
 std::vector<MarginalizedPoint> Window::MarginalizeInvisiblePoints() {
   std::vector<MarginalizedPoint> leaving;
-  if (num_keyframes() < 2) return leaving;
-  const int newest_id = keyframes_.back().id;
+  const int n = num_keyframes();
+  if (n < 2) return leaving;
+  const int newest_id = keyframes_[n - 1].id;
+  const int previous_id = keyframes_[n - 2].id;
   // Residual states at the current estimate (Optimize() leaves them current).
   if (!residual_states_current_) EvaluateWindowEnergy(&keyframes_, camera_, options_, true);
   SyncFreeLinearizationPoints(&keyframes_);
   std::vector<PointRef> informative;
   std::vector<std::vector<uint8_t>> leaves(keyframes_.size());
-  for (int h = 0; h + 1 < num_keyframes(); ++h) {
+  for (int h = 0; h + 1 < n; ++h) {
     const Keyframe& host = keyframes_[h];
     leaves[h].assign(host.points.size(), 0);
     for (int i = 0; i < static_cast<int>(host.points.size()); ++i) {
       const Point& p = host.points[i];
-      bool seen_by_newest = false;
+      const Residual* to_newest = nullptr;
+      const Residual* to_previous = nullptr;
       for (const Residual& r : p.residuals) {
-        seen_by_newest |= r.kind == ResidualKind::kTemporal && r.target_id == newest_id &&
-                          r.state == ResidualState::kActive;
+        if (r.kind != ResidualKind::kTemporal) continue;
+        if (r.target_id == newest_id) to_newest = &r;
+        if (r.target_id == previous_id) to_previous = &r;
       }
-      if (seen_by_newest) continue;
+      // DSO PointHessian::isOOB: out of the newest image, or an outlier in both
+      // of the two newest keyframes (a residual into the previous one that is
+      // gone was removed as an outlier; a point hosted there has none).
+      const bool out_of_newest = to_newest == nullptr || to_newest->state == ResidualState::kOutOfBounds;
+      const bool outlier_twice = to_newest != nullptr && to_newest->state == ResidualState::kOutlier &&
+                                 h != n - 2 && (to_previous == nullptr || to_previous->state != ResidualState::kActive);
+      if (!out_of_newest && !outlier_twice) continue;
       leaves[h][i] = 1;
       leaving.push_back(DescribeLeavingPoint(h, i));
       if (leaving.back().num_residuals >= options_.min_residuals_to_marginalize) informative.push_back({h, i});
@@ -87,7 +97,9 @@ std::vector<MarginalizedPoint> Window::MarginalizeInvisiblePoints() {
     std::vector<Point>& points = keyframes_[h].points;
     size_t k = 0;
     for (size_t i = 0; i < points.size(); ++i) {
-      if (!leaves[h][i]) points[k++] = std::move(points[i]);
+      if (leaves[h][i]) continue;
+      if (k != i) points[k] = std::move(points[i]);  // no self-move: it would empty the residuals
+      ++k;
     }
     points.resize(k);
   }

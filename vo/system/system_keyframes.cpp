@@ -153,10 +153,10 @@ void System::RunOptimization(FrameEvent* event) {
   if (!options_.bundle_adjustment || options_.optimization_iterations == 0 || window_->num_points() == 0) return;
   const auto start = std::chrono::steady_clock::now();
   window_->Optimize(options_.optimization_iterations);
-  window_->RemoveOutliers();
   // Points the new keyframe no longer sees leave the window (DSO), so that
   // keyframes whose points are gone get marginalised.
   ReportMarginalizedPoints(window_->MarginalizeInvisiblePoints());
+  window_->RemoveOutliers();
   event->optimize_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
 
