@@ -169,19 +169,56 @@ double MonoInitializer::MedianTranslationFlow(const Eigen::Isometry3d& T) const 
   return flows[flows.size() / 2];
 }
 
-bool MonoInitializer::AddFrame(const ImagePyramid& frame) {
-  Require(first_ != nullptr, "MonoInitializer::AddFrame before SetFirstFrame");
-  ++frames_;
-  if (points_.size() < 50 || frames_ > options_.max_frames) {
-    failed_ = true;
-    return false;
+Eigen::Matrix3d MonoInitializer::AlignRotation(const ImagePyramid& frame, const Eigen::Matrix3d& R_init, double* a,
+                                               double* b) const {
+  // Points at infinity (zero translation): the flow is the rotation's alone, so
+  // depth and translation drop out; only [w, a, b] (rows 3..7) are solved.
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = R_init;
+  const std::vector<double> idepths(points_.size(), 1.0);
+  Matrix8d Hff;
+  Vector8d bf;
+  std::vector<Vector8d> Hfp;
+  std::vector<double> Hpp, bp;
+  const int levels = std::min(frame.num_levels(), first_->num_levels());
+  for (int l = levels - 1; l >= 0; --l) {
+    double lambda = 0.1;
+    double energy = Evaluate(frame, l, T, *a, *b, idepths, false, nullptr, nullptr, nullptr, nullptr, nullptr, nullptr);
+    for (int it = 0; it < options_.iterations_per_level; ++it) {
+      Evaluate(frame, l, T, *a, *b, idepths, true, &Hff, &bf, &Hfp, &Hpp, &bp, nullptr);
+      Eigen::Matrix<double, 5, 5> H = Hff.bottomRightCorner<5, 5>();
+      for (int k = 0; k < 5; ++k) H(k, k) *= 1 + lambda;
+      const Eigen::Matrix<double, 5, 1> dx = -H.ldlt().solve(bf.tail<5>());
+      if (!dx.allFinite()) break;
+      Vector8d step = Vector8d::Zero();
+      step.tail<5>() = dx;
+      Eigen::Isometry3d T_try = Orthonormalized(ExpSE3(step.head<6>()) * T);
+      T_try.translation().setZero();
+      const double a_try = *a + dx[3], b_try = *b + dx[4];
+      const double e_try =
+          Evaluate(frame, l, T_try, a_try, b_try, idepths, false, nullptr, nullptr, nullptr, nullptr, nullptr, nullptr);
+      if (e_try < energy) {
+        T = T_try;
+        *a = a_try;
+        *b = b_try;
+        energy = e_try;
+        lambda = std::max(lambda * 0.5, 1e-5);
+      } else {
+        lambda *= 4;
+        if (lambda > 1e4) break;
+      }
+      if (dx.norm() < 1e-5) break;
+    }
   }
+  return T.linear();
+}
+
+MonoInitializer::Hypothesis MonoInitializer::RefineJointly(const ImagePyramid& frame, Hypothesis h) const {
   const int n = static_cast<int>(points_.size());
-  std::vector<double> idepths(n);
-  for (int i = 0; i < n; ++i) idepths[i] = points_[i].idepth;
-  const Eigen::Isometry3d T_prev = T_;
-  Eigen::Isometry3d T = velocity_ * T_;
-  double a = a_, b = b_;
+  std::vector<double>& idepths = h.idepths;
+  Eigen::Isometry3d& T = h.T;
+  double& a = h.a;
+  double& b = h.b;
   std::vector<double> means;
   Matrix8d Hff;
   Vector8d bf;
@@ -200,8 +237,6 @@ bool MonoInitializer::AddFrame(const ImagePyramid& frame) {
     return e;
   };
   const int levels = std::min(frame.num_levels(), first_->num_levels());
-  double last_energy = 0;
-  int last_num = 1;
   for (int l = levels - 1; l >= 0; --l) {
     double lambda = 0.1;
     ComputeNeighbourMeans(idepths, &means);
@@ -213,11 +248,11 @@ bool MonoInitializer::AddFrame(const ImagePyramid& frame) {
       Vector8d bsc = bf;
       std::vector<double> hpp_damped(n);
       for (int i = 0; i < n; ++i) {
-        const double h = (Hpp[i] + reg) * (1 + lambda) + 1e-6;
+        const double hd = (Hpp[i] + reg) * (1 + lambda) + 1e-6;
         const double g = bp[i] + reg * (idepths[i] - means[i]);
-        hpp_damped[i] = h;
-        Hsc.noalias() -= Hfp[i] * Hfp[i].transpose() / h;
-        bsc.noalias() -= Hfp[i] * g / h;
+        hpp_damped[i] = hd;
+        Hsc.noalias() -= Hfp[i] * Hfp[i].transpose() / hd;
+        bsc.noalias() -= Hfp[i] * g / hd;
       }
       for (int k = 0; k < 3; ++k) {
         Hsc(k, k) += translation_weight;
@@ -256,9 +291,48 @@ bool MonoInitializer::AddFrame(const ImagePyramid& frame) {
       }
       if (df.norm() < 1e-4) break;
     }
-    last_energy = energy;
-    last_num = std::max(num, 1);
+    h.energy = energy;
+    h.num = std::max(num, 1);
   }
+  return h;
+}
+
+bool MonoInitializer::AddFrame(const ImagePyramid& frame) {
+  Require(first_ != nullptr, "MonoInitializer::AddFrame before SetFirstFrame");
+  ++frames_;
+  if (points_.size() < 50 || frames_ > options_.max_frames) {
+    failed_ = true;
+    return false;
+  }
+  const int n = static_cast<int>(points_.size());
+  Hypothesis current;
+  current.idepths.resize(n);
+  for (int i = 0; i < n; ++i) current.idepths[i] = points_[i].idepth;
+  const Eigen::Isometry3d T_prev = T_;
+  current.T = velocity_ * T_;
+  current.a = a_;
+  current.b = b_;
+  // Two starts for the joint optimisation, the lower energy wins:
+  //  - constant velocity from the last estimate;
+  //  - the same, but with the rotation aligned alone first (points at
+  //    infinity): a turning start (yaw of a few degrees per
+  //    frame, little parallax) otherwise tends to fall into the basin where a
+  //    sideways translation over flat depths mimics the yaw, and the wrong
+  //    motion then propagates through the constant-velocity prediction.
+  Hypothesis rotation_first;
+  rotation_first.a = a_;
+  rotation_first.b = b_;
+  rotation_first.T = current.T;
+  rotation_first.T.linear() = AlignRotation(frame, current.T.linear(), &rotation_first.a, &rotation_first.b);
+  rotation_first.idepths = current.idepths;
+  current = RefineJointly(frame, std::move(current));
+  rotation_first = RefineJointly(frame, std::move(rotation_first));
+  const Hypothesis& best = rotation_first.energy < current.energy ? rotation_first : current;
+  const std::vector<double>& idepths = best.idepths;
+  const Eigen::Isometry3d T = best.T;
+  const double a = best.a, b = best.b;
+  const double last_energy = best.energy;
+  const int last_num = best.num;
   for (int i = 0; i < n; ++i) points_[i].idepth = idepths[i];
   velocity_ = Orthonormalized(T * T_prev.inverse());
   T_ = T;

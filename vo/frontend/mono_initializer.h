@@ -70,6 +70,18 @@ class MonoInitializer {
                   const std::vector<double>& idepths, bool want_system, Matrix8d* Hff, Vector8d* bf,
                   std::vector<Vector8d>* Hfp, std::vector<double>* Hpp, std::vector<double>* bp, int* num) const;
   void ComputeNeighbourMeans(const std::vector<double>& idepths, std::vector<double>* means) const;
+  // One start of the joint pose / affine / inverse-depth optimisation and its result.
+  struct Hypothesis {
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();  // frame <- first
+    double a = 0, b = 0;
+    std::vector<double> idepths;
+    double energy = 0;  // final energy at level 0 (photometric + priors)
+    int num = 1;        // residuals behind it
+  };
+  // Coarse-to-fine Levenberg-Marquardt from `start` (depths eliminated by Schur).
+  Hypothesis RefineJointly(const ImagePyramid& frame, Hypothesis start) const;
+  // Rotation + affine only (points at infinity), coarse to fine, from R_init.
+  Eigen::Matrix3d AlignRotation(const ImagePyramid& frame, const Eigen::Matrix3d& R_init, double* a, double* b) const;
   double MedianTranslationFlow(const Eigen::Isometry3d& T) const;
 
   MonoInitializerOptions options_;
