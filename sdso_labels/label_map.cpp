@@ -11,6 +11,8 @@ void LabelProjectionOptions::Check() const {
   Require(occlusion_margin >= 0, "labels: occlusion_margin must be >= 0");
   Require(min_depth > 0, "labels: min_depth must be > 0");
   Require(max_disparity > 0 && max_disparity < 256, "labels: max_disparity must be in (0, 256)");
+  Require(edge_radius >= 0 && edge_radius <= 10, "labels: edge_radius must be in [0, 10]");
+  Require(edge_margin >= 0, "labels: edge_margin must be >= 0");
 }
 
 int RenderLabelMap(const std::vector<LabelPoint>& points, const Eigen::Isometry3d& T_world_camera,
@@ -35,14 +37,23 @@ int RenderLabelMap(const std::vector<LabelPoint>& points, const Eigen::Isometry3
     projected.push_back({x, y, static_cast<float>(disparity)});
   }
   // Z-buffer with splats: the largest disparity (nearest point) within the
-  // occlusion radius of each pixel.
+  // occlusion radius of each pixel, and the smallest (farthest point) within
+  // the edge radius.
   cv::Mat nearest(cam.height, cam.width, CV_32F, cv::Scalar(0));
-  const int r = options.occlusion_radius;
+  cv::Mat farthest;
+  if (options.edge_radius > 0) farthest = cv::Mat(cam.height, cam.width, CV_32F, cv::Scalar(1e9));
+  const int r = options.occlusion_radius, e = options.edge_radius;
   for (const auto& p : projected) {
     for (int y = std::max(0, p.y - r); y <= std::min(cam.height - 1, p.y + r); ++y) {
       float* row = nearest.ptr<float>(y);
       for (int x = std::max(0, p.x - r); x <= std::min(cam.width - 1, p.x + r); ++x) {
         row[x] = std::max(row[x], p.disparity);
+      }
+    }
+    for (int y = std::max(0, p.y - e); e > 0 && y <= std::min(cam.height - 1, p.y + e); ++y) {
+      float* row = farthest.ptr<float>(y);
+      for (int x = std::max(0, p.x - e); x <= std::min(cam.width - 1, p.x + e); ++x) {
+        row[x] = std::min(row[x], p.disparity);
       }
     }
   }
@@ -51,6 +62,7 @@ int RenderLabelMap(const std::vector<LabelPoint>& points, const Eigen::Isometry3
   for (const auto& p : projected) {
     const float front = nearest.at<float>(p.y, p.x);
     if (p.disparity * (1.0 + options.occlusion_margin) < front) continue;  // hidden behind a nearer point
+    if (e > 0 && farthest.at<float>(p.y, p.x) * (1.0 + options.edge_margin) < p.disparity) continue;  // depth edge
     float& label = label_map->at<float>(p.y, p.x);
     if (label == 0.f) ++count;
     label = std::max(label, p.disparity);

@@ -49,10 +49,14 @@ LabelRunOptions LoadLabelRunOptions(const std::string& path) {
   check.Read("max_cost", &options.labels.stereo_check.max_cost);
   check.Read("max_disparity", &options.labels.stereo_check.max_disparity);
   check.Read("left_right_check", &options.labels.stereo_check.left_right_check);
+  check.Read("edge_shift", &options.labels.stereo_check.edge_shift);
+  check.Read("edge_max_cost", &options.labels.stereo_check.edge_max_cost);
   labels.Read("occlusion_radius", &options.labels.projection.occlusion_radius);
   labels.Read("occlusion_margin", &options.labels.projection.occlusion_margin);
   labels.Read("min_depth", &options.labels.projection.min_depth);
   labels.Read("max_disparity", &options.labels.projection.max_disparity);
+  labels.Read("edge_radius", &options.labels.projection.edge_radius);
+  labels.Read("edge_margin", &options.labels.projection.edge_margin);
   root.MarkUsed("odometry");  // validated strictly by the odometry's own loader below
   root.RequireAllKeysUsed();
   if (root.Has("odometry")) {
@@ -88,10 +92,14 @@ std::string LabelRunOptionsToYaml(const LabelRunOptions& options) {
       << "    max_cost: " << l.stereo_check.max_cost << "\n"
       << "    max_disparity: " << l.stereo_check.max_disparity << "\n"
       << "    left_right_check: " << (l.stereo_check.left_right_check ? "true" : "false") << "\n"
+      << "    edge_shift: " << l.stereo_check.edge_shift << "\n"
+      << "    edge_max_cost: " << l.stereo_check.edge_max_cost << "\n"
       << "  occlusion_radius: " << l.projection.occlusion_radius << "\n"
       << "  occlusion_margin: " << l.projection.occlusion_margin << "\n"
       << "  min_depth: " << l.projection.min_depth << "\n"
       << "  max_disparity: " << l.projection.max_disparity << "\n"
+      << "  edge_radius: " << l.projection.edge_radius << "\n"
+      << "  edge_margin: " << l.projection.edge_margin << "\n"
       << "odometry:\n";
   std::istringstream odometry(vo::OdometryOptionsToYaml(options.odometry));
   for (std::string line; std::getline(odometry, line);) out << "  " << line << "\n";

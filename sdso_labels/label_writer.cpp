@@ -19,6 +19,23 @@ double MsSince(std::chrono::steady_clock::time_point start) {
 
 }  // namespace
 
+LabelProjectionOptions LabelOptions::DefaultProjection() {
+  LabelProjectionOptions projection;
+  projection.edge_radius = 3;  // silhouette points are the main source of > 1 px errors
+  return projection;
+}
+
+StereoCheckOptions LabelOptions::DefaultStereoCheck() {
+  StereoCheckOptions check;
+  // Shifted windows reject labels next to depth edges; with them the left-right
+  // check and the uniqueness gap removed no further wrong labels (only correct ones).
+  check.edge_shift = 3;
+  check.edge_max_cost = 0.4;
+  check.left_right_check = false;
+  check.min_cost_gap = 0.0;
+  return check;
+}
+
 void LabelOptions::Check() const {
   Require(min_good_residuals >= 0, "labels: min_good_residuals must be >= 0");
   Require(max_depth > projection.min_depth, "labels: max_depth must exceed projection.min_depth");

@@ -38,15 +38,19 @@ struct LabelOptions {
   double max_mean_energy = 1e9;      // mean photometric energy over the point's active residuals
   double max_stereo_energy = 1e9;    // energy of its static stereo residual (ignored when it has none)
   // Keyframes created after a frame whose points also label it (forward motion keeps
-  // them in view); 0 = only the window the frame was tracked against.
-  int future_keyframes = 5;
+  // them in view); 0 = only the window the frame was tracked against. More hosts mean
+  // more labels; wrong projections are caught by the stereo check on the frame's own pair.
+  int future_keyframes = 12;
   // Keyframes marginalised before a frame was tracked whose points also label it.
-  int past_keyframes = 0;
+  int past_keyframes = 6;
   bool overwrite = false;            // rewrite label files that already exist (else resume: keep them)
-  LabelProjectionOptions projection; // occlusion handling and ranges of the rendered maps
-  StereoCheckOptions stereo_check;   // confidence test on the labelled frame's own stereo pair
+  LabelProjectionOptions projection = DefaultProjection();  // occlusion/edge handling, ranges
+  StereoCheckOptions stereo_check = DefaultStereoCheck();   // test on the labelled frame's own pair
 
   void Check() const;
+  // Label-mode defaults of the generic options (measurements: configs/labels_default.yaml).
+  static LabelProjectionOptions DefaultProjection();
+  static StereoCheckOptions DefaultStereoCheck();
 };
 
 // Receives each finished label map (frame index, CV_32F disparity map).

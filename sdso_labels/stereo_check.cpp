@@ -15,6 +15,8 @@ void StereoCheckOptions::Check() const {
   Require(max_offset > 0 && exclusion >= max_offset, "labels: stereo_check needs 0 < max_offset <= exclusion");
   Require(min_cost_gap >= 0 && max_cost > 0, "labels: stereo_check thresholds must be positive");
   Require(max_disparity >= 1, "labels: stereo_check.max_disparity must be >= 1");
+  Require(edge_shift >= 0 && edge_shift <= 10, "labels: stereo_check.edge_shift must be in [0, 10]");
+  Require(edge_max_cost > 0, "labels: stereo_check.edge_max_cost must be > 0");
 }
 
 namespace {
@@ -187,12 +189,45 @@ void StereoLabelChecker::ScanCosts(const cv::Mat& fixed, const cv::Mat& fixed_me
   }
 }
 
+float StereoLabelChecker::CostAt(int x, int y, float disparity) const {
+  const int r = options_.window_radius;
+  const int d0 = static_cast<int>(std::floor(disparity));
+  const float frac = disparity - d0;
+  if (x - d0 - 1 < r || x - d0 >= left_.cols - r) return kNoMatch;
+  const float norm = left_norm_.at<float>(y, x);
+  if (norm * norm <= kMinVariance) return kNoMatch;
+  const float mean = left_mean_.at<float>(y, x);
+  float cross0 = 0.f, cross1 = 0.f;  // at d0 and d0 + 1
+  for (int dy = -r; dy <= r; ++dy) {
+    const float* f = left_.ptr<float>(y + dy);
+    const float* o = right_.ptr<float>(y + dy);
+    for (int dx = -r; dx <= r; ++dx) {
+      const float w = f[x + dx] - mean;
+      cross0 += w * o[x - d0 + dx];
+      cross1 += w * o[x - d0 - 1 + dx];
+    }
+  }
+  const float n0 = right_norm_.at<float>(y, x - d0), n1 = right_norm_.at<float>(y, x - d0 - 1);
+  const float c0 = n0 * n0 > kMinVariance ? 1.0f - cross0 / (norm * n0) : kNoMatch;
+  const float c1 = n1 * n1 > kMinVariance ? 1.0f - cross1 / (norm * n1) : kNoMatch;
+  return (1.0f - frac) * c0 + frac * c1;
+}
+
 bool StereoLabelChecker::Keep(int x, int y, float label) {
   const int r = options_.window_radius;
   if (!(label > 0) || y < r || y >= left_.rows - r || x < r || x >= left_.cols - r) return false;
   // Every integer disparity whose right window fits in the image.
   const int max_d = std::min(x - r, options_.max_disparity);
   if (max_d < 0 || label > max_d + options_.max_offset) return false;
+  // Depth edges: the shifted windows must match at the label too.
+  if (const int e = options_.edge_shift; e > 0) {
+    const int shifts[4][2] = {{-e, 0}, {e, 0}, {0, -e}, {0, e}};
+    for (const auto& s : shifts) {
+      const int xs = x + s[0], ys = y + s[1];
+      if (ys < r || ys >= left_.rows - r || xs < r || xs >= left_.cols - r) return false;
+      if (CostAt(xs, ys, label) > options_.edge_max_cost) return false;
+    }
+  }
   // Pre-test on a band of disparities around the label: if the best match
   // inside the band misses the label, so does the best over the full range
   // (which is either the same match or lies outside the band), so most wrong

@@ -1,17 +1,20 @@
 // Stereo verification of label candidates on the labelled frame's own
 // rectified pair: a classical matching-confidence test (ZNCC over a square
 // window along the scanline, full disparity range). A label survives when the
-// best match lies within `max_offset` px of it and is unique — clearly better
-// than every match farther than `exclusion` px away. This removes the points
-// that Stereo DSO got confidently wrong: periodic texture (bricks, paving),
-// edges parallel to the scanline, and projections across occlusions; the
-// left-right check (the matched right pixel must match back) removes labels
-// on depth edges, where window matching prefers the foreground.
+// best match over the whole range lies within `max_offset` px of it (so
+// periodic texture and edges parallel to the scanline, where Stereo DSO finds
+// confidently wrong minima, fail unless the label is the global optimum),
+// optionally with a cost gap to every match farther than `exclusion` px
+// (uniqueness) and a left-right check (the matched right pixel must match
+// back: occlusions). Depth edges: window matching "fattens" the foreground,
+// so the windows shifted left/right/up/down must match at the label too; at a
+// silhouette one of them covers the other surface and fails.
 //
 // Speed: window means and norms come from box filters computed once per
 // frame, so a label's whole disparity scan costs one multiply-add per window
 // pixel and disparity, laid out as a contiguous 1-D correlation per window
-// row (vectorised by the compiler).
+// row (vectorised by the compiler); a band of disparities around the label
+// is tested first, so most wrong labels never need the full scan.
 #pragma once
 
 #include <opencv2/core.hpp>
@@ -28,6 +31,13 @@ struct StereoCheckOptions {
   double max_cost = 0.7;        // 1-ZNCC of the best match (0 = identical up to gain/offset)
   int max_disparity = 256;      // px: disparities searched are 0..max_disparity (labels stop at 255)
   bool left_right_check = true; // the right pixel's own best match must lead back (occlusions, edges)
+  // Depth-edge test with shifted windows: the windows centred `edge_shift` px left, right,
+  // above and below the pixel must also match at the label (cost <= edge_max_cost). At a
+  // depth edge one of them covers the other surface and fails, so labels next to
+  // silhouettes (where window matching "fattens" the foreground and a one-pixel error
+  // swaps foreground and background) are dropped. 0 = off.
+  int edge_shift = 0;
+  double edge_max_cost = 0.5;
 
   void Check() const;
 };
@@ -44,6 +54,9 @@ class StereoLabelChecker {
   bool Keep(int x, int y, float disparity);
 
  private:
+  // 1 - ZNCC of the left window at (x, y) and the right one at x - disparity
+  // (linear between the two integer disparities around it).
+  float CostAt(int x, int y, float disparity) const;
   // Matching costs (1 - ZNCC) of the window of `fixed` at (x, y) against the
   // windows of `other` centred at x_begin .. x_end - 1 of the same row.
   void ScanCosts(const cv::Mat& fixed, const cv::Mat& fixed_mean, const cv::Mat& fixed_norm, const cv::Mat& other,

@@ -81,3 +81,23 @@ TEST(LabelStatistics, CountsAndAccuracyByHand) {
   EXPECT_NEAR(stats.mean_absolute_error(), (0.5 + 1.2 + 0.1) / 3, 1e-5);
   EXPECT_EQ(stats.ToJson()["labels_per_frame_min"], 1);
 }
+
+TEST(LabelMap, DepthEdgesAreNotLabelled) {
+  const StereoCamera cam = SmallCamera();
+  // A near point (5 m) 2 px left of a far point (20 m), both in front of the camera:
+  // u = 100 * X / Z + 20, so X = 0 at 5 m -> u = 20, X = 0.4 at 20 m -> u = 22.
+  const std::vector<LabelPoint> points = {{Eigen::Vector3d(0, 0, 5)}, {Eigen::Vector3d(0.4, 0, 20)}};
+  LabelProjectionOptions options;
+  options.occlusion_radius = 1;  // the far point is not hidden ...
+  cv::Mat map;
+  EXPECT_EQ(RenderLabelMap(points, Eigen::Isometry3d::Identity(), cam, options, &map), 2);
+  options.edge_radius = 3;       // ... but the near one sits on a depth edge
+  EXPECT_EQ(RenderLabelMap(points, Eigen::Isometry3d::Identity(), cam, options, &map), 1);
+  EXPECT_FLOAT_EQ(map.at<float>(10, 22), 100 * 0.5 / 20);
+  EXPECT_EQ(map.at<float>(10, 20), 0.f);
+  // Points on one surface (within edge_margin) are no edge.
+  const std::vector<LabelPoint> surface = {{Eigen::Vector3d(0, 0, 10)}, {Eigen::Vector3d(0.2, 0, 10.5)}};
+  EXPECT_EQ(RenderLabelMap(surface, Eigen::Isometry3d::Identity(), cam, options, &map), 2);
+  options.edge_radius = 11;
+  EXPECT_THROW(options.Check(), Error);
+}

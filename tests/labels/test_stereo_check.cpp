@@ -102,6 +102,32 @@ TEST(StereoCheck, RejectsOccludedBackgroundKeepsVisibleSurfaces) {
   EXPECT_FALSE(checker.Keep(74, 30, 8.0f));
 }
 
+TEST(StereoCheck, ShiftedWindowsRejectLabelsAtDepthEdges) {
+  // Foreground square at disparity 20 over a background at disparity 8 (as above).
+  const cv::Mat background = RandomTexture(60, 200, 2);
+  const cv::Mat foreground = RandomTexture(60, 200, 3);
+  cv::Mat left = background.clone();
+  cv::Mat right = ShiftedRight(background, 8);
+  foreground(cv::Rect(80, 10, 30, 40)).copyTo(left(cv::Rect(80, 10, 30, 40)));
+  foreground(cv::Rect(80, 10, 30, 40)).copyTo(right(cv::Rect(60, 10, 30, 40)));
+  StereoCheckOptions centred;
+  centred.edge_shift = 0;
+  centred.left_right_check = false;
+  StereoCheckOptions shifted = centred;
+  shifted.edge_shift = 3;
+  shifted.edge_max_cost = 0.4;
+  StereoLabelChecker plain(left, right, centred), edge_aware(left, right, shifted);
+  // On the silhouette's first columns the centred window still matches (mostly foreground) ...
+  EXPECT_TRUE(plain.Keep(80, 30, 20.0f));
+  EXPECT_TRUE(plain.Keep(81, 30, 20.0f));
+  // ... but the window shifted onto the background does not.
+  EXPECT_FALSE(edge_aware.Keep(80, 30, 20.0f));
+  EXPECT_FALSE(edge_aware.Keep(81, 30, 20.0f));
+  // Away from edges every shifted window lies on the same surface.
+  EXPECT_TRUE(edge_aware.Keep(95, 30, 20.0f));
+  EXPECT_TRUE(edge_aware.Keep(40, 30, 8.0f));
+}
+
 TEST(StereoCheck, FastCheckerAgreesWithReference) {
   const cv::Mat left = RandomTexture(80, 240, 4);
   // A slanted surface: disparity grows with the row (10 .. 25 px), plus random labels.
