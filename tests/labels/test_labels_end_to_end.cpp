@@ -97,3 +97,13 @@ TEST(LabelsEndToEnd, ConfigIsStrict) {
   std::ofstream(dir + "/typo2.yaml") << "odometry:\n  active_pints: 3\n";
   EXPECT_THROW(labels::LoadLabelRunOptions(dir + "/typo2.yaml"), Error);
 }
+
+TEST(LabelsEndToEnd, ShippedDefaultConfigEqualsBuiltInDefaults) {
+  const std::string path = std::string(DVSO_TEST_DATA_DIR) + "/../configs/labels_default.yaml";
+  const labels::LabelRunOptions loaded = labels::LoadLabelRunOptions(path);
+  labels::LabelRunOptions defaults;
+  defaults.odometry = vo::OdometryOptions::Preset("default");
+  EXPECT_EQ(labels::LabelRunOptionsToYaml(loaded), labels::LabelRunOptionsToYaml(defaults));
+  EXPECT_EQ(loaded.labels.future_keyframes, 12);
+  EXPECT_TRUE(loaded.labels.stereo_check.enabled);
+}
