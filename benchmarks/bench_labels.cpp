@@ -32,12 +32,13 @@ double MsSince(Clock::time_point start) {
 struct RunResult {
   double mean_ms = 0;
   double labels_per_frame = 0;
-  dvso::labels::LabelWriterCounters counters;
+  dvso::labels::LabelCounters counters;
 };
 
 // Stereo odometry over the frames; with labels when `label_dir` is not empty.
 RunResult Run(const dvso::labels::LabelRunOptions& options, const dvso::StereoCamera& camera,
-              const std::vector<dvso::StereoFrame>& frames, int first, const std::string& label_dir) {
+              const std::vector<dvso::StereoFrame>& frames, int first, const std::string& label_dir,
+              bool worker_thread) {
   dvso::vo::System system(options.odometry, camera, dvso::vo::OdometryMode::kStereo);
   std::unique_ptr<dvso::labels::LabelWriter> writer;
   long labels = 0;
@@ -49,7 +50,8 @@ RunResult Run(const dvso::labels::LabelRunOptions& options, const dvso::StereoCa
         [&](int index, cv::Mat* left, cv::Mat* right) {
           *left = frames[index - first].left;
           *right = frames[index - first].right;
-        });
+        },
+        worker_thread);
     system.AddObserver(writer.get());
   }
   const auto start = Clock::now();
@@ -83,13 +85,17 @@ int main(int argc, char** argv) {
   const std::string label_dir =
       (std::filesystem::temp_directory_path() / ("bench_labels_" + std::to_string(::getpid()))).string();
 
-  const RunResult alone = Run(options, sequence->camera(), frames, first, "");
-  const RunResult with = Run(options, sequence->camera(), frames, first, label_dir);
+  const RunResult alone = Run(options, sequence->camera(), frames, first, "", false);
+  const RunResult with = Run(options, sequence->camera(), frames, first, label_dir, false);
+  const RunResult beside = Run(options, sequence->camera(), frames, first, label_dir, true);
   const int n = static_cast<int>(frames.size());
   std::printf("%d frames %dx%d of %s\n", n, sequence->camera().left.width, sequence->camera().left.height,
               sequence_dir.c_str());
   std::printf("odometry alone:       %.1f ms/frame\n", alone.mean_ms);
-  std::printf("odometry + labels:    %.1f ms/frame (%.0f labels/frame)\n", with.mean_ms, with.labels_per_frame);
+  std::printf("odometry + labels:    %.1f ms/frame (%.0f labels/frame), one thread\n", with.mean_ms,
+              with.labels_per_frame);
+  std::printf("odometry + labels:    %.1f ms/frame (%.0f labels/frame), labels on a worker thread\n", beside.mean_ms,
+              beside.labels_per_frame);
   std::printf("  label writer:       %.1f ms/frame (projection %.1f, stereo check %.1f, PNG %.1f); "
               "stereo check kept %ld of %ld\n",
               (with.counters.extract_ms + with.counters.write_ms) / n,

@@ -15,7 +15,7 @@ namespace {
 struct LabelsArgs {
   std::string sequence, list, out, config, gt_disparity, gt_subdir, preset = "default";
   int first = 0, count = -1;
-  bool json = false, overwrite = false, quiet = false;
+  bool json = false, overwrite = false, quiet = false, worker_thread = false;
 };
 
 void RunLabels(const LabelsArgs& args) {
@@ -32,6 +32,7 @@ void RunLabels(const LabelsArgs& args) {
   options.count = args.count;
   options.labels.overwrite = args.overwrite;
   options.progress = !args.quiet;
+  options.worker_thread = args.worker_thread;
   options.Check();
   if (!args.json) {
     std::cout << "# dvso labels configuration" << (args.config.empty() ? " (preset " + args.preset + ")" : " (" + args.config + ")")
@@ -64,7 +65,8 @@ void RunLabels(const LabelsArgs& args) {
                   << "odometry:               " << summary.keyframes << " keyframes, " << summary.lost << " lost frames\n"
                   << "speed (ms/frame):       odometry " << summary.odometry_ms_per_frame << ", labels "
                   << summary.labels_ms_per_frame << ", total " << summary.total_ms_per_frame
-                  << " (image decoding " << summary.image_read_ms_per_frame << ", not included)\n";
+                  << " (image decoding " << summary.image_read_ms_per_frame << ", not included; labels on "
+                  << (summary.worker_thread ? "a worker thread" : "the odometry thread") << ")\n";
       }
       std::cout << std::flush;
     }
@@ -89,6 +91,8 @@ void AddLabelsCommand(CLI::App& app) {
   cmd->add_flag("--overwrite", args->overwrite, "Rewrite existing label files (default: resume)");
   cmd->add_flag("--json", args->json, "Print the summary as JSON");
   cmd->add_flag("--quiet", args->quiet, "No progress bars");
+  cmd->add_flag("--worker-thread", args->worker_thread,
+                "Produce labels on a worker thread beside the odometry (helps only with a spare core)");
   cmd->callback([args] { RunLabels(*args); });
 }
 

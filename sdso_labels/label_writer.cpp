@@ -1,20 +1,26 @@
 #include "sdso_labels/label_writer.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
-#include <filesystem>
 
-#include "core/disparity_io.h"
 #include "core/error.h"
-#include "core/fs_util.h"
 
 namespace dvso::labels {
 
 namespace {
 
-double MsSince(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+LabelProducerOptions ProducerOptions(const LabelOptions& options, bool worker_thread) {
+  LabelProducerOptions producer;
+  producer.projection = options.projection;
+  producer.stereo_check = options.stereo_check;
+  producer.overwrite = options.overwrite;
+  producer.worker_thread = worker_thread;
+  return producer;
+}
+
+const LabelOptions& Checked(const LabelOptions& options) {
+  options.Check();
+  return options;
 }
 
 }  // namespace
@@ -48,16 +54,10 @@ void LabelOptions::Check() const {
 }
 
 LabelWriter::LabelWriter(const StereoCamera& camera, const LabelOptions& options, std::string out_dir,
-                         LabelSink sink, StereoPairLoader loader)
+                         LabelSink sink, StereoPairLoader loader, bool worker_thread)
     : camera_(camera),
-      options_(options),
-      out_dir_(std::move(out_dir)),
-      sink_(std::move(sink)),
-      loader_(std::move(loader)) {
-  options_.Check();
-  camera_.Check();
-  EnsureDirectory(out_dir_);
-}
+      options_(Checked(options)),
+      producer_(camera, ProducerOptions(options, worker_thread), std::move(out_dir), std::move(sink), std::move(loader)) {}
 
 void LabelWriter::AddUser(int host) { ++hosts_[host].users; }
 
@@ -165,6 +165,7 @@ void LabelWriter::OnFinished() {
   }
   for (int host : recent_past_) RemoveUser(host);
   recent_past_.clear();
+  producer_.Finish();
 }
 
 bool LabelWriter::Ready(const PendingFrame& frame) const {
@@ -185,37 +186,20 @@ void LabelWriter::FlushReady() {
 }
 
 void LabelWriter::Write(const PendingFrame& frame) {
-  const auto start = std::chrono::steady_clock::now();
-  cv::Mat labels(camera_.left.height, camera_.left.width, CV_32F, cv::Scalar(0));
+  LabelJob job;
+  job.frame_index = frame.frame_index;
   const auto reference = frame.reference >= 0 ? hosts_.find(frame.reference) : hosts_.end();
   if (reference != hosts_.end() && reference->second.final) {
-    const Eigen::Isometry3d T_world_frame = reference->second.T_world_camera * frame.T_ref_frame;
-    std::vector<LabelPoint> points;
+    job.has_pose = true;
+    job.T_world_frame = reference->second.T_world_camera * frame.T_ref_frame;
     for (int id : frame.hosts) {
       auto it = hosts_.find(id);
       if (it == hosts_.end() || !it->second.final) continue;
-      points.insert(points.end(), it->second.world.begin(), it->second.world.end());
-    }
-    counters_.projected += RenderLabelMap(points, T_world_frame, camera_, options_.projection, &labels);
-    if (loader_ && options_.stereo_check.enabled) {
-      const auto check_start = std::chrono::steady_clock::now();
-      cv::Mat left, right;
-      loader_(frame.frame_index, &left, &right);
-      VerifyLabelsWithStereo(left, right, options_.stereo_check, &labels);
-      counters_.check_ms += MsSince(check_start);
+      job.points.insert(job.points.end(), it->second.world.begin(), it->second.world.end());
     }
   }
-  const int kept = cv::countNonZero(labels);
-  counters_.verified += kept;
-  const auto written = std::chrono::steady_clock::now();
-  counters_.extract_ms += MsSince(start);
-  const std::string path = JoinPath(out_dir_, FrameFileName(frame.frame_index, ".png"));
-  if (options_.overwrite || !std::filesystem::exists(path)) WriteKittiMapPng(path, labels);
-  counters_.write_ms += MsSince(written);
-  ++counters_.frames;
-  if (sink_) sink_(frame.frame_index, labels);
-  ++frames_written_;
   for (int host : frame.hosts) RemoveUser(host);
+  producer_.Submit(std::move(job));
 }
 
 }  // namespace dvso::labels

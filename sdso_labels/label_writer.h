@@ -23,6 +23,7 @@
 
 #include "core/camera.h"
 #include "sdso_labels/label_map.h"
+#include "sdso_labels/label_producer.h"
 #include "sdso_labels/label_stats.h"
 #include "sdso_labels/stereo_check.h"
 #include "vo/system/observer.h"
@@ -53,28 +54,18 @@ struct LabelOptions {
   static StereoCheckOptions DefaultStereoCheck();
 };
 
-// Receives each finished label map (frame index, CV_32F disparity map).
-using LabelSink = std::function<void(int frame_index, const cv::Mat& labels)>;
-// Loads the rectified grey pair of a frame (for the stereo check).
-using StereoPairLoader = std::function<void(int frame_index, cv::Mat* left, cv::Mat* right)>;
-
-// Counters of the label extraction (for summaries and tuning).
-struct LabelWriterCounters {
-  long frames = 0;
-  long projected = 0;      // labels after projection and occlusion handling
-  long verified = 0;       // labels kept by the stereo check (= written)
-  double extract_ms = 0;   // projection + stereo check
-  double check_ms = 0;     // the stereo check alone (part of extract_ms)
-  double write_ms = 0;     // PNG encoding and writing
-};
+using LabelWriterCounters = LabelCounters;
 
 class LabelWriter : public vo::OdometryObserver {
  public:
   // Writes `out_dir/%06d.png` for every tracked frame (KITTI uint16, *256,
   // 0 = no label), atomically. `sink` (optional) also gets every map, e.g.
-  // for statistics against ground truth. Without `loader` the stereo check is skipped.
+  // for statistics against ground truth. Without `loader` the stereo check is
+  // skipped. With `worker_thread` the maps are produced on a worker thread
+  // (sink and loader are then called from it); all are written when
+  // OnFinished() returns.
   LabelWriter(const StereoCamera& camera, const LabelOptions& options, std::string out_dir, LabelSink sink = {},
-              StereoPairLoader loader = {});
+              StereoPairLoader loader = {}, bool worker_thread = false);
 
   void OnFrameTracked(const vo::FrameEvent& event) override;
   void OnWindowOptimized(const vo::WindowEvent& event) override;
@@ -83,11 +74,12 @@ class LabelWriter : public vo::OdometryObserver {
   void OnReset(int frame_index) override;
   void OnFinished() override;
 
-  int frames_written() const { return frames_written_; }
+  int frames_written() const { return producer_.frames_written(); }
   int frames_pending() const { return static_cast<int>(pending_.size()); }
   // Keyframes whose points or poses are still held (memory stays bounded).
   int hosts_held() const { return static_cast<int>(hosts_.size()); }
-  const LabelWriterCounters& counters() const { return counters_; }
+  // Complete once OnFinished() returned.
+  const LabelCounters& counters() const { return producer_.counters(); }
 
  private:
   struct PendingFrame {
@@ -115,15 +107,11 @@ class LabelWriter : public vo::OdometryObserver {
 
   StereoCamera camera_;
   LabelOptions options_;
-  std::string out_dir_;
-  LabelSink sink_;
-  StereoPairLoader loader_;
   std::vector<int> window_;             // keyframes in the window after the last optimisation
   std::deque<int> recent_past_;         // last past_keyframes marginalised keyframes (same map)
   std::deque<PendingFrame> pending_;    // in input order
   std::map<int, Host> hosts_;           // by keyframe frame index; erased when users drop to 0
-  int frames_written_ = 0;
-  LabelWriterCounters counters_;
+  LabelProducer producer_;               // renders, verifies and writes the maps
 };
 
 }  // namespace dvso::labels

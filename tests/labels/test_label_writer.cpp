@@ -5,6 +5,7 @@
 #include <filesystem>
 
 #include "core/disparity_io.h"
+#include "core/error.h"
 #include "core/fs_util.h"
 #include "sdso_labels/label_writer.h"
 
@@ -203,4 +204,58 @@ TEST(LabelWriter, ResetDropsOldMapKeyframes) {
   EXPECT_EQ(cv::countNonZero(seen[2]), 1);
   EXPECT_GT(seen[2].at<float>(10, 30), 0.f);
   EXPECT_EQ(writer.hosts_held(), 0);
+}
+
+TEST(LabelWriter, WorkerThreadWritesTheSameMaps) {
+  // The sliding-window scenario above, produced on the calling thread and on a worker.
+  std::map<int, cv::Mat> maps[2];
+  for (int threaded = 0; threaded < 2; ++threaded) {
+    LabelOptions options;
+    options.future_keyframes = 2;
+    options.past_keyframes = 2;
+    LabelWriter writer(Camera(), options, TempDir() + "_worker" + std::to_string(threaded),
+                       [&](int i, const cv::Mat& m) { maps[threaded][i] = m.clone(); }, {}, threaded == 1);
+    for (int k = 0; k < 20; ++k) {
+      writer.OnWindowOptimized(Window(k, {{k, Forward(0.1 * k)}}));
+      writer.OnFrameTracked(Tracked(k, k));
+      Marginalize(&writer, k, Forward(0.1 * k), {Point(k, 20 + k % 3, 10, 0.1, 3)});
+    }
+    writer.OnFinished();
+    EXPECT_EQ(writer.frames_written(), 20);
+    EXPECT_EQ(writer.counters().frames, 20);
+  }
+  ASSERT_EQ(maps[0].size(), 20u);
+  ASSERT_EQ(maps[1].size(), 20u);
+  for (int i = 0; i < 20; ++i) {
+    EXPECT_EQ(cv::countNonZero(maps[0][i] != maps[1][i]), 0) << "frame " << i;
+    EXPECT_GT(cv::countNonZero(maps[0][i]), 0) << "frame " << i;
+  }
+}
+
+TEST(LabelProducer, WorkerErrorsReachTheCaller) {
+  LabelProducerOptions options;
+  options.worker_thread = true;
+  options.max_queue = 1;
+  LabelProducer producer(Camera(), options, TempDir() + "_error", {},
+                         [](int frame, cv::Mat* left, cv::Mat* right) {
+                           if (frame == 2) throw Error("cannot read frame 2");
+                           *left = cv::Mat(21, 41, CV_8U, cv::Scalar(0));
+                           *right = left->clone();
+                         });
+  bool thrown = false;
+  try {
+    for (int i = 0; i < 6; ++i) {
+      LabelJob job;
+      job.frame_index = i;
+      job.has_pose = true;
+      job.points.push_back({Eigen::Vector3d(0, 0, 10)});
+      producer.Submit(std::move(job));
+    }
+    producer.Finish();
+  } catch (const Error& e) {
+    thrown = true;
+    EXPECT_NE(std::string(e.what()).find("frame 2"), std::string::npos);
+  }
+  EXPECT_TRUE(thrown);
+  EXPECT_LT(producer.frames_written(), 6);
 }

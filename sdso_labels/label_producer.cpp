@@ -1,0 +1,125 @@
+#include "sdso_labels/label_producer.h"
+
+#include <chrono>
+#include <filesystem>
+
+#include "core/disparity_io.h"
+#include "core/error.h"
+#include "core/fs_util.h"
+
+namespace dvso::labels {
+
+namespace {
+
+double MsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
+}  // namespace
+
+void LabelProducerOptions::Check() const {
+  projection.Check();
+  stereo_check.Check();
+  Require(max_queue >= 1, "labels: max_queue must be >= 1");
+}
+
+LabelProducer::LabelProducer(const StereoCamera& camera, const LabelProducerOptions& options, std::string out_dir,
+                             LabelSink sink, StereoPairLoader loader)
+    : camera_(camera), options_(options), out_dir_(std::move(out_dir)), sink_(std::move(sink)), loader_(std::move(loader)) {
+  options_.Check();
+  camera_.Check();
+  EnsureDirectory(out_dir_);
+  if (options_.worker_thread) worker_ = std::thread([this] { WorkerLoop(); });
+}
+
+LabelProducer::~LabelProducer() {
+  if (!worker_.joinable()) return;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stop_ = true;
+  }
+  changed_.notify_all();
+  worker_.join();
+}
+
+void LabelProducer::RethrowWorkerError() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (error_) std::rethrow_exception(error_);
+}
+
+void LabelProducer::Submit(LabelJob job) {
+  if (!worker_.joinable()) {
+    Produce(job);
+    return;
+  }
+  std::unique_lock<std::mutex> lock(mutex_);
+  changed_.wait(lock, [this] { return error_ || static_cast<int>(queue_.size()) < options_.max_queue; });
+  if (error_) std::rethrow_exception(error_);
+  queue_.push_back(std::move(job));
+  lock.unlock();
+  changed_.notify_all();
+}
+
+void LabelProducer::Finish() {
+  if (worker_.joinable()) {
+    std::unique_lock<std::mutex> lock(mutex_);
+    changed_.wait(lock, [this] { return error_ || (queue_.empty() && !busy_); });
+  }
+  RethrowWorkerError();
+}
+
+void LabelProducer::WorkerLoop() {
+  for (;;) {
+    LabelJob job;
+    {
+      std::unique_lock<std::mutex> lock(mutex_);
+      changed_.wait(lock, [this] { return stop_ || !queue_.empty(); });
+      if (queue_.empty() || error_) return;  // stopped (or failed: the rest is not written)
+      job = std::move(queue_.front());
+      queue_.pop_front();
+      busy_ = true;
+    }
+    std::exception_ptr error;
+    try {
+      Produce(job);
+    } catch (...) {
+      error = std::current_exception();
+    }
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      busy_ = false;
+      if (error) {
+        error_ = error;
+        queue_.clear();
+      }
+    }
+    changed_.notify_all();
+    if (error) return;
+  }
+}
+
+void LabelProducer::Produce(const LabelJob& job) {
+  const auto start = std::chrono::steady_clock::now();
+  cv::Mat labels(camera_.left.height, camera_.left.width, CV_32F, cv::Scalar(0));
+  if (job.has_pose) {
+    counters_.projected += RenderLabelMap(job.points, job.T_world_frame, camera_, options_.projection, &labels);
+    if (loader_ && options_.stereo_check.enabled) {
+      const auto check_start = std::chrono::steady_clock::now();
+      cv::Mat left, right;
+      loader_(job.frame_index, &left, &right);
+      VerifyLabelsWithStereo(left, right, options_.stereo_check, &labels);
+      counters_.check_ms += MsSince(check_start);
+    }
+  }
+  counters_.verified += cv::countNonZero(labels);
+  const auto written = std::chrono::steady_clock::now();
+  counters_.extract_ms += MsSince(start);
+  const std::string path = JoinPath(out_dir_, FrameFileName(job.frame_index, ".png"));
+  if (options_.overwrite || !std::filesystem::exists(path)) WriteKittiMapPng(path, labels);
+  counters_.write_ms += MsSince(written);
+  ++counters_.frames;
+  if (sink_) sink_(job.frame_index, labels);
+  ++frames_written_;
+}
+
+}  // namespace dvso::labels
