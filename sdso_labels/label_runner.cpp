@@ -5,8 +5,6 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
-#include <map>
-#include <mutex>
 #include <sstream>
 
 #include "core/config_yaml.h"
@@ -14,6 +12,7 @@
 #include "core/error.h"
 #include "core/fs_util.h"
 #include "core/sequence.h"
+#include "sdso_labels/pair_cache.h"
 #include "vo/system/sequence_runner.h"
 
 namespace dvso::labels {
@@ -135,65 +134,6 @@ cv::Mat GroundTruth(const LabelRunOptions& options, int frame_index) {
 double MsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
-
-// A SequenceReader that keeps the pairs the odometry has read until the label
-// writer has used them, so the stereo check never decodes an image twice.
-// Frames are labelled in input order a few keyframes after they were
-// tracked; Take(i) drops everything up to i, so only that lag stays in memory.
-// Thread-safe: Take() runs on the label writer's worker thread.
-class PairCachingReader : public SequenceReader {
- public:
-  explicit PairCachingReader(const SequenceReader& base) : base_(base) {}
-  int size() const override { return base_.size(); }
-  bool is_stereo() const override { return base_.is_stereo(); }
-  bool has_color() const override { return base_.has_color(); }
-  const StereoCamera& camera() const override { return base_.camera(); }
-  const std::vector<double>& timestamps() const override { return base_.timestamps(); }
-  const std::string& root() const override { return base_.root(); }
-
-  StereoFrame Read(int index, const SequenceReadOptions& options) const override {
-    const auto start = std::chrono::steady_clock::now();
-    StereoFrame frame = base_.Read(index, options);
-    std::lock_guard<std::mutex> lock(mutex_);
-    read_ms_ += MsSince(start);
-    if (!frame.right.empty()) cache_[index] = {frame.left, frame.right};
-    return frame;
-  }
-
-  // The pair of frame `index` (from the cache, else read again); forgets it and all earlier ones.
-  void Take(int index, cv::Mat* left, cv::Mat* right) const {
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      auto it = cache_.find(index);
-      if (it != cache_.end()) {
-        *left = it->second.first;
-        *right = it->second.second;
-        cache_.erase(cache_.begin(), cache_.upper_bound(index));
-        return;
-      }
-    }
-    {
-      SequenceReadOptions pair;
-      pair.load_right = true;
-      const StereoFrame frame = Read(index, pair);
-      *left = frame.left;
-      *right = frame.right;
-    }
-    std::lock_guard<std::mutex> lock(mutex_);
-    cache_.erase(cache_.begin(), cache_.upper_bound(index));
-  }
-
-  double read_ms() const {
-    std::lock_guard<std::mutex> lock(mutex_);
-    return read_ms_;
-  }
-
- private:
-  const SequenceReader& base_;
-  mutable std::mutex mutex_;
-  mutable std::map<int, std::pair<cv::Mat, cv::Mat>> cache_;
-  mutable double read_ms_ = 0;
-};
 
 }  // namespace
 

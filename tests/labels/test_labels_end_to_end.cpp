@@ -10,7 +10,9 @@
 #include "core/error.h"
 #include "core/fs_util.h"
 #include "core/simulator.h"
+#include "core/sequence.h"
 #include "sdso_labels/label_runner.h"
+#include "sdso_labels/pair_cache.h"
 
 namespace fs = std::filesystem;
 using namespace dvso;
@@ -106,4 +108,30 @@ TEST(LabelsEndToEnd, ShippedDefaultConfigEqualsBuiltInDefaults) {
   EXPECT_EQ(labels::LabelRunOptionsToYaml(loaded), labels::LabelRunOptionsToYaml(defaults));
   EXPECT_EQ(loaded.labels.future_keyframes, 12);
   EXPECT_TRUE(loaded.labels.stereo_check.enabled);
+}
+
+TEST(PairCachingReader, ServesReadPairsOnceAndStaysBounded) {
+  const auto sequence = OpenSequence(SimulatedSequenceDir());
+  labels::PairCachingReader reader(*sequence, 4);
+  EXPECT_EQ(reader.size(), sequence->size());
+  SequenceReadOptions stereo;
+  stereo.load_right = true;
+  for (int i = 0; i < 3; ++i) reader.Read(i, stereo);
+  EXPECT_EQ(reader.cached(), 3u);
+  cv::Mat left, right;
+  reader.Take(1, &left, &right);  // frames 0 and 1 are forgotten
+  const StereoFrame direct = sequence->Read(1, stereo);
+  EXPECT_EQ(cv::countNonZero(left != direct.left), 0);
+  EXPECT_EQ(cv::countNonZero(right != direct.right), 0);
+  EXPECT_EQ(reader.cached(), 1u);
+  // Not cached (never read): read again from disk.
+  reader.Take(10, &left, &right);
+  EXPECT_EQ(cv::countNonZero(left != sequence->Read(10, stereo).left), 0);
+  EXPECT_EQ(reader.cached(), 0u);
+  // At most 4 pairs are held.
+  for (int i = 11; i < 20; ++i) reader.Read(i, stereo);
+  EXPECT_EQ(reader.cached(), 4u);
+  reader.Take(12, &left, &right);  // dropped earlier: read again, still correct
+  EXPECT_EQ(cv::countNonZero(right != sequence->Read(12, stereo).right), 0);
+  EXPECT_GT(reader.read_ms(), 0.0);
 }
