@@ -10,9 +10,11 @@
 // points are projected with the frame's final pose
 // T_world_frame = T_world_ref(final) * T_ref_frame(tracked); keyframes get
 // their own points at their exact pixels. Only well-constrained points are
-// used (enough good residuals, positive, in range), occluded ones are dropped
-// (label_map.h) and each label is verified on the frame's own stereo pair
-// (stereo_check.h).
+// used (enough good residuals, positive, in range), occluded ones and those
+// on depth edges are dropped (label_map.h) and each label is verified on the
+// frame's own stereo pair (stereo_check.h). This class does the keyframe
+// bookkeeping (which points and poses are final, held with per-keyframe
+// reference counts); LabelProducer renders, verifies and writes the maps.
 #pragma once
 
 #include <deque>
