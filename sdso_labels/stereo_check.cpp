@@ -143,6 +143,7 @@ int ArgMin(const std::vector<float>& costs) {
 // unique: low cost, and every match farther than `exclusion` is clearly worse.
 bool IsUnique(const std::vector<float>& costs, int best, double best_sub, const StereoCheckOptions& options) {
   if (costs[best] > options.max_cost) return false;
+  if (options.min_cost_gap <= 0) return true;  // `best` is the global minimum: no competitor is better
   float competitor = kNoMatch;
   for (int d = 0; d < static_cast<int>(costs.size()); ++d) {
     if (std::abs(d - best_sub) > options.exclusion) competitor = std::min(competitor, costs[d]);
@@ -219,15 +220,6 @@ bool StereoLabelChecker::Keep(int x, int y, float label) {
   // Every integer disparity whose right window fits in the image.
   const int max_d = std::min(x - r, options_.max_disparity);
   if (max_d < 0 || label > max_d + options_.max_offset) return false;
-  // Depth edges: the shifted windows must match at the label too.
-  if (const int e = options_.edge_shift; e > 0) {
-    const int shifts[4][2] = {{-e, 0}, {e, 0}, {0, -e}, {0, e}};
-    for (const auto& s : shifts) {
-      const int xs = x + s[0], ys = y + s[1];
-      if (ys < r || ys >= left_.rows - r || xs < r || xs >= left_.cols - r) return false;
-      if (CostAt(xs, ys, label) > options_.edge_max_cost) return false;
-    }
-  }
   // Pre-test on a band of disparities around the label: if the best match
   // inside the band misses the label, so does the best over the full range
   // (which is either the same match or lies outside the band), so most wrong
@@ -242,6 +234,15 @@ bool StereoLabelChecker::Keep(int x, int y, float label) {
     const int band_best = ArgMin(costs_);
     if (costs_[band_best] > options_.max_cost) return false;
     if (std::abs(band_low + SubPixelMinimum(costs_, band_best) - label) > options_.max_offset) return false;
+  }
+  // Depth edges: the shifted windows must match at the label too.
+  if (const int e = options_.edge_shift; e > 0) {
+    const int shifts[4][2] = {{-e, 0}, {e, 0}, {0, -e}, {0, e}};
+    for (const auto& s : shifts) {
+      const int xs = x + s[0], ys = y + s[1];
+      if (ys < r || ys >= left_.rows - r || xs < r || xs >= left_.cols - r) return false;
+      if (CostAt(xs, ys, label) > options_.edge_max_cost) return false;
+    }
   }
   // Right window centres x - max_d .. x; costs_[d] belongs to centre x - d.
   ScanCosts(left_, left_mean_, left_norm_, right_, right_norm_, x, y, x - max_d, x + 1, &back_costs_);
