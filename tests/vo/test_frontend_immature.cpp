@@ -50,6 +50,38 @@ TEST(FrontendImmature, StaticStereoMatchingRecoversDepth) {
   EXPECT_GT(accurate, 0.9 * good);
 }
 
+// Static stereo from integer pixels walks integer positions and reads pixels
+// directly; a search along an (imperceptibly) tilted line takes the bilinear
+// path. Both must find the same matches.
+TEST(FrontendImmature, StaticStereoDirectReadsEqualInterpolation) {
+  Scene s;
+  const double baseline = 0.5;
+  Eigen::Isometry3d T_world_right = Eigen::Isometry3d::Identity();
+  T_world_right.translation().x() = baseline;
+  cv::Mat right_img;
+  s.box.Render(s.cam, T_world_right, &right_img, nullptr);
+  const ImagePyramid right(right_img, s.cam);
+  ImmaturePointOptions opt;
+  const float fxb = static_cast<float>(s.cam.fx * baseline);
+  const Eigen::Vector3f Kt(-fxb, 0.f, 0.f);
+  const Eigen::Vector3f Kt_tilted(-fxb, 1e-6f * fxb, 0.f);
+  int compared = 0, same = 0;
+  for (const auto& px : s.pixels) {
+    ImmaturePoint direct, interpolated;
+    if (!direct.Initialize(s.host->level(0), 0, px.x, px.y, px.level)) continue;
+    interpolated = direct;
+    const auto a = direct.Trace(right.level(0), Eigen::Matrix3f::Identity(), Kt, 1.f, 0.f, opt, 150.f);
+    const auto b = interpolated.Trace(right.level(0), Eigen::Matrix3f::Identity(), Kt_tilted, 1.f, 0.f, opt, 150.f);
+    ++compared;
+    if (a == b && (a != TraceStatus::kGood ||
+                   std::fabs(direct.IdepthEstimate() - interpolated.IdepthEstimate()) * fxb < 0.01f)) {
+      ++same;
+    }
+  }
+  ASSERT_GT(compared, 400);
+  EXPECT_GE(same, compared - 2);
+}
+
 TEST(FrontendImmature, TemporalEpipolarSearchConvergesAndBracketsTruth) {
   Scene s;
   Vector6d xi;

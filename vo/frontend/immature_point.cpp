@@ -67,6 +67,7 @@ TraceStatus ImmaturePoint::Trace(const PyramidLevel& target, const Eigen::Matrix
   if (!target.InBounds(u_min, v_min, border)) return last_status = TraceStatus::kOutOfBounds;
 
   float dist, u_max, v_max;
+  float dir_u = 0.0f, dir_v = 0.0f;  // unit direction of an unbounded search (exact: (-1, 0) for static stereo)
   if (HasFiniteInterval()) {
     const Eigen::Vector3f ptp_max = pr + Kt * idepth_max;
     if (!(ptp_max.z() > 1e-6f)) return last_status = TraceStatus::kOutOfBounds;
@@ -87,8 +88,10 @@ TraceStatus ImmaturePoint::Trace(const PyramidLevel& target, const Eigen::Matrix
     float dv = ptp_far.y() / ptp_far.z() - v_min;
     const float n = std::hypot(du, dv);
     if (!(n > 1e-9f)) return last_status = TraceStatus::kBadCondition;  // no translation: no depth information
-    u_max = u_min + search * du / n;
-    v_max = v_min + search * dv / n;
+    dir_u = du / n;
+    dir_v = dv / n;
+    u_max = u_min + search * dir_u;
+    v_max = v_min + search * dir_v;
     dist = search;
     // Clip the segment to the image.
     if (!target.InBounds(u_max, v_max, border)) {
@@ -106,8 +109,9 @@ TraceStatus ImmaturePoint::Trace(const PyramidLevel& target, const Eigen::Matrix
 
   // Expected pixel error of a match along direction (dx, dy): large when the
   // image gradient is perpendicular to the epipolar line (DSO's error model).
-  const float dx_unit = (u_max - u_min) / dist;
-  const float dy_unit = (v_max - v_min) / dist;
+  const bool unbounded = dir_u != 0.0f || dir_v != 0.0f;
+  const float dx_unit = unbounded ? dir_u : (u_max - u_min) / dist;
+  const float dy_unit = unbounded ? dir_v : (v_max - v_min) / dist;
   const Eigen::Vector2f along(dx_unit, dy_unit), perp(dy_unit, -dx_unit);
   const float ga = along.dot(gradient_h * along);
   const float gb = perp.dot(gradient_h * perp);
@@ -128,10 +132,21 @@ TraceStatus ImmaturePoint::Trace(const PyramidLevel& target, const Eigen::Matrix
   int best_idx = -1;
   std::vector<float> energies(num_steps);
   float cu = u_min, cv = v_min;
+  // Static stereo from an integer pixel walks integer positions along the
+  // row: read the pixels directly (what the bilinear interpolation returns
+  // there anyway, at a quarter of the memory traffic).
+  const bool integral_walk = sy == 0.0f && sx == std::round(sx) && cu == std::floor(cu) && cv == std::floor(cv);
   for (int i = 0; i < num_steps; ++i, cu += sx, cv += sy) {
     float e = 0;
     if (!target.InBounds(cu, cv, border)) {
       e = 1e10f;
+    } else if (integral_walk) {
+      const Eigen::Vector3f* centre =
+          target.data.data() + static_cast<size_t>(cv) * target.width + static_cast<size_t>(cu);
+      for (int k = 0; k < kPatternSize && e < energy_th; ++k) {
+        const float hit = centre[kPatternOffsets[k][1] * target.width + kPatternOffsets[k][0]][0];
+        e += HuberEnergy(hit - (a * color[k] + b), huber);
+      }
     } else {
       // Early exit above the outlier threshold: such a sample can be neither a
       // valid match nor a meaningful second best (its energy stays a lower
