@@ -65,7 +65,8 @@ void RunLabels(const LabelsArgs& args) {
                   << "odometry:               " << summary.keyframes << " keyframes, " << summary.lost << " lost frames\n"
                   << "speed (ms/frame):       odometry " << summary.odometry_ms_per_frame << ", labels "
                   << summary.labels_ms_per_frame << ", total " << summary.total_ms_per_frame
-                  << " (image decoding " << summary.image_read_ms_per_frame << ", not included; labels on "
+                  << " (image decoding " << summary.image_read_ms_per_frame << " with " << summary.image_rereads
+                  << " pairs read twice, not included; labels on "
                   << (summary.worker_thread ? "a worker thread" : "the odometry thread") << ")\n";
       }
       std::cout << std::flush;

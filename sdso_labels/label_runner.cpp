@@ -24,6 +24,7 @@ void LabelRunOptions::Check() const {
   odometry.Check();
   Require(first >= 0, "labels: first must be >= 0");
   Require(count == -1 || count >= 1, "labels: count must be >= 1 (or -1 for all)");
+  Require(image_cache_pairs >= 1, "labels: image_cache_pairs must be >= 1");
 }
 
 LabelRunOptions LoadLabelRunOptions(const std::string& path) {
@@ -116,6 +117,7 @@ nlohmann::json LabelRunSummary::ToJson() const {
     j["labels_on_worker_thread"] = worker_thread;
     j["total_ms_per_frame"] = total_ms_per_frame;
     j["image_read_ms_per_frame"] = image_read_ms_per_frame;
+    j["image_rereads"] = image_rereads;
     j["projected_labels"] = projected_labels;
     j["verified_labels"] = verified_labels;
     j["keyframes"] = keyframes;
@@ -164,7 +166,7 @@ LabelRunSummary RunLabelExtraction(const std::string& sequence_dir, const std::s
                                   GroundTruth(options, i));
     }
   } else {
-    PairCachingReader reader(*sequence);
+    PairCachingReader reader(*sequence, static_cast<size_t>(options.image_cache_pairs));
     double evaluation_ms = 0;
     LabelWriter writer(
         sequence->camera(), options.labels, out_dir,
@@ -200,6 +202,7 @@ LabelRunSummary RunLabelExtraction(const std::string& sequence_dir, const std::s
     }
     summary.worker_thread = options.worker_thread;
     summary.image_read_ms_per_frame = reader.read_ms() / frames;
+    summary.image_rereads = reader.rereads();
     summary.projected_labels = counters.projected;
     summary.verified_labels = counters.verified;
     summary.keyframes = odometry.keyframes;

@@ -33,6 +33,10 @@ void PairCachingReader::Take(int index, cv::Mat* left, cv::Mat* right) const {
       return;
     }
   }
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    ++rereads_;
+  }
   SequenceReadOptions pair;
   pair.load_right = true;
   const StereoFrame frame = Read(index, pair);
@@ -50,6 +54,11 @@ double PairCachingReader::read_ms() const {
 size_t PairCachingReader::cached() const {
   std::lock_guard<std::mutex> lock(mutex_);
   return cache_.size();
+}
+
+int PairCachingReader::rereads() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return rereads_;
 }
 
 }  // namespace dvso::labels

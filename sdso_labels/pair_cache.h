@@ -20,7 +20,7 @@ namespace dvso::labels {
 
 class PairCachingReader : public SequenceReader {
  public:
-  explicit PairCachingReader(const SequenceReader& base, size_t max_cached = 64);
+  explicit PairCachingReader(const SequenceReader& base, size_t max_cached = 128);
 
   int size() const override { return base_.size(); }
   bool is_stereo() const override { return base_.is_stereo(); }
@@ -36,6 +36,7 @@ class PairCachingReader : public SequenceReader {
 
   double read_ms() const;  // total time spent decoding images
   size_t cached() const;   // pairs held
+  int rereads() const;     // pairs Take() had to read again (not cached)
 
  private:
   const SequenceReader& base_;
@@ -43,6 +44,7 @@ class PairCachingReader : public SequenceReader {
   mutable std::mutex mutex_;
   mutable std::map<int, std::pair<cv::Mat, cv::Mat>> cache_;  // guarded by mutex_
   mutable double read_ms_ = 0;                                // guarded by mutex_
+  mutable int rereads_ = 0;                                   // guarded by mutex_
 };
 
 }  // namespace dvso::labels

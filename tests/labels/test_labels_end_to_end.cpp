@@ -133,5 +133,6 @@ TEST(PairCachingReader, ServesReadPairsOnceAndStaysBounded) {
   EXPECT_EQ(reader.cached(), 4u);
   reader.Take(12, &left, &right);  // dropped earlier: read again, still correct
   EXPECT_EQ(cv::countNonZero(right != sequence->Read(12, stereo).right), 0);
+  EXPECT_EQ(reader.rereads(), 2);
   EXPECT_GT(reader.read_ms(), 0.0);
 }
