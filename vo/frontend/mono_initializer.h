@@ -8,6 +8,10 @@
 // the mean inverse depth is normalised to 1 after every step (the photometric
 // energy is invariant to it). Initialisation succeeds once enough frames were
 // seen and the translation-induced parallax exceeds a threshold.
+// Every frame is optimised from two starts, the lower energy wins: constant
+// velocity, and the same with the rotation first aligned alone (points at
+// infinity). At a turning start with little parallax the first alone can fall
+// into the basin where a sideways translation over flat depths mimics the yaw.
 #pragma once
 
 #include <Eigen/Geometry>

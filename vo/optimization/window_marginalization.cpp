@@ -1,6 +1,8 @@
 // Marginalisation of a keyframe (DSO): its points go into the prior through
 // the Schur complement on their inverse depths, then the keyframe's own
-// parameters are Schur-complemented out of the prior.
+// parameters are Schur-complemented out of the prior. Points the newest
+// keyframe no longer observes leave earlier, on their own (DSO
+// flagPointsForRemoval), the same way.
 //
 // Simplifications w.r.t. DSO (documented in vo_interface.md):
 //  - a hosted point is marginalised when it still has at least
