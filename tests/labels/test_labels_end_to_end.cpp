@@ -52,10 +52,13 @@ TEST(LabelsEndToEnd, EveryFrameLabelledAndAccurateThenResumes) {
     EXPECT_EQ(labels.cols, 416);
     EXPECT_EQ(labels.rows, 128);
   }
-  EXPECT_GT(first.statistics.mean_labels_per_frame(), 100.0);
-  EXPECT_GT(first.statistics.compared(), 2000);
-  EXPECT_GT(first.statistics.share_within_1px(), 0.8);
-  EXPECT_LT(first.statistics.mean_absolute_error(), 1.5);
+  // Measured: ~1170 labels/frame, 99.4 % within 1 px, MAE 0.12 px (416x128, 40 frames).
+  EXPECT_GT(first.statistics.mean_labels_per_frame(), 500.0);
+  EXPECT_GT(first.statistics.compared(), 20000);
+  EXPECT_GT(first.statistics.share_within_1px(), 0.95);
+  EXPECT_LT(first.statistics.mean_absolute_error(), 0.5);
+  EXPECT_NEAR(first.verified_labels, first.statistics.mean_labels_per_frame() * kFrames, 0.5);
+  EXPECT_GT(first.projected_labels, first.verified_labels);  // the stereo check removed some
   EXPECT_TRUE(fs::exists(out + "/labels_summary.json"));
   EXPECT_TRUE(fs::exists(out + "/odometry/trajectory.txt"));
 
