@@ -13,15 +13,16 @@ namespace dvso::cli {
 namespace {
 
 struct LabelsArgs {
-  std::string sequence, list, out, config, gt_disparity, gt_subdir, preset = "default";
+  std::string sequence, list, out, config, gt_disparity, gt_subdir, gt_disparity_right, gt_subdir_right,
+      preset = "default";
   int first = 0, count = -1;
-  bool json = false, overwrite = false, quiet = false, worker_thread = false;
+  bool json = false, overwrite = false, quiet = false, worker_thread = false, right_labels = false;
 };
 
 void RunLabels(const LabelsArgs& args) {
   Require(args.sequence.empty() != args.list.empty(), "give exactly one of --sequence DIR or --list FILE");
-  Require(args.gt_disparity.empty() || args.list.empty(),
-          "--gt-disparity is for one sequence; with --list use --gt-subdir NAME (e.g. disp_0)");
+  Require((args.gt_disparity.empty() && args.gt_disparity_right.empty()) || args.list.empty(),
+          "--gt-disparity(-right) is for one sequence; with --list use --gt-subdir(-right) NAME (e.g. disp_0)");
   labels::LabelRunOptions options;
   if (!args.config.empty()) {
     options = labels::LoadLabelRunOptions(args.config);
@@ -31,6 +32,7 @@ void RunLabels(const LabelsArgs& args) {
   options.first = args.first;
   options.count = args.count;
   options.labels.overwrite = args.overwrite;
+  if (args.right_labels) options.labels.right_labels = true;
   options.progress = !args.quiet;
   options.worker_thread = args.worker_thread;
   options.Check();
@@ -51,6 +53,9 @@ void RunLabels(const LabelsArgs& args) {
     run.gt_disparity_dir = !args.gt_disparity.empty() ? args.gt_disparity
                            : !args.gt_subdir.empty()  ? JoinPath(sequence, args.gt_subdir)
                                                       : "";
+    run.gt_disparity_right_dir = !args.gt_disparity_right.empty() ? args.gt_disparity_right
+                                 : !args.gt_subdir_right.empty()  ? JoinPath(sequence, args.gt_subdir_right)
+                                                                  : "";
     if (!args.quiet && sequences.size() > 1) {
       std::cerr << "[" << s + 1 << "/" << sequences.size() << "] " << sequence << std::endl;
     }
@@ -59,6 +64,7 @@ void RunLabels(const LabelsArgs& args) {
     if (!args.json) {
       std::cout << "== " << sequence << " -> " << out << (summary.skipped_complete ? " (complete, skipped)" : "") << "\n"
                 << summary.statistics.ToText();
+      if (summary.right_labels) std::cout << "right image:\n" << summary.right_statistics.ToText();
       if (!summary.skipped_complete) {
         std::cout << "stereo check:           kept " << summary.verified_labels << " of " << summary.projected_labels
                   << " projected labels\n"
@@ -87,6 +93,9 @@ void AddLabelsCommand(CLI::App& app) {
   cmd->add_option("--preset", args->preset, "Odometry preset without --config: default|fast");
   cmd->add_option("--gt-disparity", args->gt_disparity, "GT disparity folder (%06d.png) for accuracy statistics");
   cmd->add_option("--gt-subdir", args->gt_subdir, "Batch: GT disparity subfolder inside each sequence (e.g. disp_0)");
+  cmd->add_flag("--right-labels", args->right_labels, "Also label the right image (OUT/right/%06d.png)");
+  cmd->add_option("--gt-disparity-right", args->gt_disparity_right, "GT disparity folder of the right image (e.g. disp_1)");
+  cmd->add_option("--gt-subdir-right", args->gt_subdir_right, "Batch: right GT disparity subfolder (e.g. disp_1)");
   cmd->add_option("--first", args->first, "First frame index");
   cmd->add_option("--count", args->count, "Number of frames (-1 = all)");
   cmd->add_flag("--overwrite", args->overwrite, "Rewrite existing label files (default: resume)");

@@ -23,12 +23,22 @@ void LabelProducerOptions::Check() const {
   Require(max_queue >= 1, "labels: max_queue must be >= 1");
 }
 
+std::string LabelProducer::LabelPath(const std::string& out_dir, int frame_index, bool right) {
+  return JoinPath(right ? JoinPath(out_dir, "right") : out_dir, FrameFileName(frame_index, ".png"));
+}
+
 LabelProducer::LabelProducer(const StereoCamera& camera, const LabelProducerOptions& options, std::string out_dir,
-                             LabelSink sink, StereoPairLoader loader)
-    : camera_(camera), options_(options), out_dir_(std::move(out_dir)), sink_(std::move(sink)), loader_(std::move(loader)) {
+                             LabelSink sink, StereoPairLoader loader, LabelSink right_sink)
+    : camera_(camera),
+      options_(options),
+      out_dir_(std::move(out_dir)),
+      sink_(std::move(sink)),
+      loader_(std::move(loader)),
+      right_sink_(std::move(right_sink)) {
   options_.Check();
   camera_.Check();
   EnsureDirectory(out_dir_);
+  if (options_.right_labels) EnsureDirectory(JoinPath(out_dir_, "right"));
   if (options_.worker_thread) worker_ = std::thread([this] { WorkerLoop(); });
 }
 
@@ -98,27 +108,46 @@ void LabelProducer::WorkerLoop() {
   }
 }
 
-void LabelProducer::Produce(const LabelJob& job) {
-  const auto start = std::chrono::steady_clock::now();
+cv::Mat LabelProducer::Render(const LabelJob& job, bool right, const cv::Mat& left_image, const cv::Mat& right_image) {
   cv::Mat labels(camera_.left.height, camera_.left.width, CV_32F, cv::Scalar(0));
-  if (job.has_pose) {
-    counters_.projected += RenderLabelMap(job.points, job.T_world_frame, camera_, options_.projection, &labels);
-    if (loader_ && options_.stereo_check.enabled) {
-      const auto check_start = std::chrono::steady_clock::now();
-      cv::Mat left, right;
-      loader_(job.frame_index, &left, &right);
-      VerifyLabelsWithStereo(left, right, options_.stereo_check, &labels);
-      counters_.check_ms += MsSince(check_start);
+  if (!job.has_pose) return labels;
+  // The rectified right camera sits `baseline` along the left camera's +x axis.
+  Eigen::Isometry3d T_world_camera = job.T_world_frame;
+  if (right) T_world_camera.translate(Eigen::Vector3d(camera_.baseline, 0, 0));
+  const int projected = RenderLabelMap(job.points, T_world_camera, camera_, options_.projection, &labels);
+  (right ? counters_.right_projected : counters_.projected) += projected;
+  if (!left_image.empty() && options_.stereo_check.enabled) {
+    const auto check_start = std::chrono::steady_clock::now();
+    if (right) {
+      VerifyRightLabelsWithStereo(left_image, right_image, options_.stereo_check, &labels);
+    } else {
+      VerifyLabelsWithStereo(left_image, right_image, options_.stereo_check, &labels);
     }
+    counters_.check_ms += MsSince(check_start);
   }
-  counters_.verified += cv::countNonZero(labels);
-  const auto written = std::chrono::steady_clock::now();
-  counters_.extract_ms += MsSince(start);
-  const std::string path = JoinPath(out_dir_, FrameFileName(job.frame_index, ".png"));
+  (right ? counters_.right_verified : counters_.verified) += cv::countNonZero(labels);
+  return labels;
+}
+
+void LabelProducer::WriteMap(const std::string& path, const cv::Mat& labels) {
+  const auto start = std::chrono::steady_clock::now();
   if (options_.overwrite || !std::filesystem::exists(path)) WriteKittiMapPng(path, labels);
-  counters_.write_ms += MsSince(written);
+  counters_.write_ms += MsSince(start);
+}
+
+void LabelProducer::Produce(const LabelJob& job) {
+  auto start = std::chrono::steady_clock::now();
+  cv::Mat left_image, right_image;
+  if (job.has_pose && loader_ && options_.stereo_check.enabled) loader_(job.frame_index, &left_image, &right_image);
+  const cv::Mat labels = Render(job, false, left_image, right_image);
+  cv::Mat right_labels;
+  if (options_.right_labels) right_labels = Render(job, true, left_image, right_image);
+  counters_.extract_ms += MsSince(start);
+  WriteMap(LabelPath(out_dir_, job.frame_index), labels);
+  if (options_.right_labels) WriteMap(LabelPath(out_dir_, job.frame_index, true), right_labels);
   ++counters_.frames;
   if (sink_) sink_(job.frame_index, labels);
+  if (right_sink_ && options_.right_labels) right_sink_(job.frame_index, right_labels);
   ++frames_written_;
 }
 

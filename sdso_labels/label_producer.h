@@ -34,6 +34,7 @@ struct LabelCounters {
   long frames = 0;
   long projected = 0;      // labels after projection and occlusion/edge handling
   long verified = 0;       // labels kept by the stereo check (= written)
+  long right_projected = 0, right_verified = 0;  // the same for right-image labels
   double extract_ms = 0;   // projection + stereo check
   double check_ms = 0;     // the stereo check alone (part of extract_ms)
   double write_ms = 0;     // PNG encoding and writing
@@ -51,6 +52,10 @@ struct LabelProducerOptions {
   LabelProjectionOptions projection;  // rendering of the points
   StereoCheckOptions stereo_check;    // verification on the frame's pair (needs a loader)
   bool overwrite = false;             // rewrite existing label files (else keep them: resume)
+  // Also label the right image (paper section 3.2: L_s uses Omega_DSO of both images):
+  // the same points seen from the right camera, verified on the mirrored pair,
+  // written to out_dir/right/%06d.png.
+  bool right_labels = false;
   bool worker_thread = false;         // produce on a worker thread
   int max_queue = 4;                  // frames waiting for the worker before Submit blocks
 
@@ -59,8 +64,12 @@ struct LabelProducerOptions {
 
 class LabelProducer {
  public:
+  // `right_sink` gets the right-image maps (with options.right_labels).
   LabelProducer(const StereoCamera& camera, const LabelProducerOptions& options, std::string out_dir,
-                LabelSink sink, StereoPairLoader loader);
+                LabelSink sink, StereoPairLoader loader, LabelSink right_sink = {});
+
+  // Where frame `index`'s label file goes (right = the right image's).
+  static std::string LabelPath(const std::string& out_dir, int frame_index, bool right = false);
   ~LabelProducer();  // waits for the worker (errors are dropped here: call Finish to see them)
   LabelProducer(const LabelProducer&) = delete;
   LabelProducer& operator=(const LabelProducer&) = delete;
@@ -77,6 +86,9 @@ class LabelProducer {
 
  private:
   void Produce(const LabelJob& job);
+  // Renders (and verifies) one side's map; `right` selects the right camera.
+  cv::Mat Render(const LabelJob& job, bool right, const cv::Mat& left_image, const cv::Mat& right_image);
+  void WriteMap(const std::string& path, const cv::Mat& labels);
   void WorkerLoop();
   void RethrowWorkerError();
 
@@ -85,6 +97,7 @@ class LabelProducer {
   std::string out_dir_;
   LabelSink sink_;
   StereoPairLoader loader_;
+  LabelSink right_sink_;
   LabelCounters counters_;
   std::atomic<int> frames_written_{0};
 

@@ -41,6 +41,7 @@ LabelRunOptions LoadLabelRunOptions(const std::string& path) {
   labels.Read("max_stereo_energy", &options.labels.max_stereo_energy);
   labels.Read("future_keyframes", &options.labels.future_keyframes);
   labels.Read("past_keyframes", &options.labels.past_keyframes);
+  labels.Read("right_labels", &options.labels.right_labels);
   YamlSection& check = labels.Child("stereo_check");
   check.Read("enabled", &options.labels.stereo_check.enabled);
   check.Read("window_radius", &options.labels.stereo_check.window_radius);
@@ -84,6 +85,7 @@ std::string LabelRunOptionsToYaml(const LabelRunOptions& options) {
       << "  max_stereo_energy: " << l.max_stereo_energy << "\n"
       << "  future_keyframes: " << l.future_keyframes << "\n"
       << "  past_keyframes: " << l.past_keyframes << "\n"
+      << "  right_labels: " << (l.right_labels ? "true" : "false") << "\n"
       << "  stereo_check:\n"
       << "    enabled: " << (l.stereo_check.enabled ? "true" : "false") << "\n"
       << "    window_radius: " << l.stereo_check.window_radius << "\n"
@@ -111,6 +113,13 @@ nlohmann::json LabelRunSummary::ToJson() const {
   nlohmann::json j = statistics.ToJson();
   j["sequence"] = sequence;
   j["skipped_complete"] = skipped_complete;
+  if (right_labels) {
+    j["right"] = right_statistics.ToJson();
+    if (!skipped_complete) {
+      j["right"]["projected_labels"] = right_projected_labels;
+      j["right"]["verified_labels"] = right_verified_labels;
+    }
+  }
   if (!skipped_complete) {
     j["odometry_ms_per_frame"] = odometry_ms_per_frame;
     j["labels_ms_per_frame"] = labels_ms_per_frame;
@@ -128,9 +137,9 @@ nlohmann::json LabelRunSummary::ToJson() const {
 
 namespace {
 
-cv::Mat GroundTruth(const LabelRunOptions& options, int frame_index) {
-  if (options.gt_disparity_dir.empty()) return cv::Mat();
-  return ReadKittiMapPng(JoinPath(options.gt_disparity_dir, FrameFileName(frame_index, ".png")));
+cv::Mat GroundTruth(const std::string& dir, int frame_index) {
+  if (dir.empty()) return cv::Mat();
+  return ReadKittiMapPng(JoinPath(dir, FrameFileName(frame_index, ".png")));
 }
 
 double MsSince(std::chrono::steady_clock::time_point start) {
@@ -144,9 +153,8 @@ LabelRunSummary RunLabelExtraction(const std::string& sequence_dir, const std::s
   options.Check();
   const auto sequence = OpenSequence(sequence_dir);
   Require(sequence->is_stereo(), sequence_dir + ": labels need a stereo sequence (image_1/ and a baseline in calib.txt)");
-  if (!options.gt_disparity_dir.empty()) {
-    RequireFile(fs::is_directory(options.gt_disparity_dir), options.gt_disparity_dir,
-                "ground-truth disparity folder does not exist");
+  for (const std::string& dir : {options.gt_disparity_dir, options.gt_disparity_right_dir}) {
+    if (!dir.empty()) RequireFile(fs::is_directory(dir), dir, "ground-truth disparity folder does not exist");
   }
   Require(options.first < sequence->size(), sequence_dir + ": first frame beyond the sequence");
   const int end = options.count < 0 ? sequence->size() : std::min(sequence->size(), options.first + options.count);
@@ -154,16 +162,22 @@ LabelRunSummary RunLabelExtraction(const std::string& sequence_dir, const std::s
 
   LabelRunSummary summary;
   summary.sequence = sequence_dir;
+  summary.right_labels = options.labels.right_labels;
   bool complete = !options.labels.overwrite;
   for (int i = options.first; complete && i < end; ++i) {
-    complete = fs::exists(JoinPath(out_dir, FrameFileName(i, ".png")));
+    complete = fs::exists(LabelProducer::LabelPath(out_dir, i)) &&
+               (!options.labels.right_labels || fs::exists(LabelProducer::LabelPath(out_dir, i, true)));
   }
   if (complete) {
     // Resume: every label file is there (written atomically, so complete); only re-read for the summary.
     summary.skipped_complete = true;
     for (int i = options.first; i < end; ++i) {
-      summary.statistics.AddFrame(ReadKittiMapPng(JoinPath(out_dir, FrameFileName(i, ".png"))),
-                                  GroundTruth(options, i));
+      summary.statistics.AddFrame(ReadKittiMapPng(LabelProducer::LabelPath(out_dir, i)),
+                                  GroundTruth(options.gt_disparity_dir, i));
+      if (options.labels.right_labels) {
+        summary.right_statistics.AddFrame(ReadKittiMapPng(LabelProducer::LabelPath(out_dir, i, true)),
+                                          GroundTruth(options.gt_disparity_right_dir, i));
+      }
     }
   } else {
     PairCachingReader reader(*sequence, static_cast<size_t>(options.image_cache_pairs));
@@ -172,11 +186,16 @@ LabelRunSummary RunLabelExtraction(const std::string& sequence_dir, const std::s
         sequence->camera(), options.labels, out_dir,
         [&](int frame_index, const cv::Mat& labels) {
           const auto start = std::chrono::steady_clock::now();
-          summary.statistics.AddFrame(labels, GroundTruth(options, frame_index));
+          summary.statistics.AddFrame(labels, GroundTruth(options.gt_disparity_dir, frame_index));
           evaluation_ms += MsSince(start);
         },
         [&](int frame_index, cv::Mat* left, cv::Mat* right) { reader.Take(frame_index, left, right); },
-        options.worker_thread);
+        options.worker_thread,
+        [&](int frame_index, const cv::Mat& labels) {
+          const auto start = std::chrono::steady_clock::now();
+          summary.right_statistics.AddFrame(labels, GroundTruth(options.gt_disparity_right_dir, frame_index));
+          evaluation_ms += MsSince(start);
+        });
     vo::SequenceRunOptions run;
     run.first = options.first;
     run.count = end - options.first;
@@ -205,6 +224,8 @@ LabelRunSummary RunLabelExtraction(const std::string& sequence_dir, const std::s
     summary.image_rereads = reader.rereads();
     summary.projected_labels = counters.projected;
     summary.verified_labels = counters.verified;
+    summary.right_projected_labels = counters.right_projected;
+    summary.right_verified_labels = counters.right_verified;
     summary.keyframes = odometry.keyframes;
     summary.lost = odometry.lost;
     Require(writer.frames_written() == end - options.first,

@@ -18,6 +18,7 @@ struct LabelRunOptions {
   int first = 0;                    // first frame index of each sequence
   int count = -1;                   // frames per sequence (-1 = all)
   std::string gt_disparity_dir;     // optional GT disparity folder (%06d.png) for accuracy statistics
+  std::string gt_disparity_right_dir;  // the same for right-image labels (e.g. the simulator's disp_1/)
   bool progress = true;             // progress bars on stderr
   // Produce labels on a worker thread beside the odometry. Off by default: on
   // the 2-core target the window optimisation already uses both cores (bench_labels).
@@ -50,14 +51,18 @@ struct LabelRunSummary {
   int image_rereads = 0;               // pairs decoded a second time (labelling lagged > the cache)
   long projected_labels = 0;           // labels before the stereo check (all frames)
   long verified_labels = 0;            // labels kept by it
+  long right_projected_labels = 0, right_verified_labels = 0;  // the same, right image
   int keyframes = 0, lost = 0;         // of the odometry run
   LabelStatistics statistics;
+  bool right_labels = false;
+  LabelStatistics right_statistics;    // right-image labels (when written)
 
   nlohmann::json ToJson() const;
 };
 
-// Writes out_dir/%06d.png for every frame, out_dir/odometry/ (trajectory,
-// run log, config) and out_dir/labels_summary.json.
+// Writes out_dir/%06d.png for every frame (and out_dir/right/%06d.png with
+// labels.right_labels), out_dir/odometry/ (trajectory, run log, config) and
+// out_dir/labels_summary.json.
 LabelRunSummary RunLabelExtraction(const std::string& sequence_dir, const std::string& out_dir,
                                    const LabelRunOptions& options);
 

@@ -14,6 +14,7 @@ LabelProducerOptions ProducerOptions(const LabelOptions& options, bool worker_th
   producer.projection = options.projection;
   producer.stereo_check = options.stereo_check;
   producer.overwrite = options.overwrite;
+  producer.right_labels = options.right_labels;
   producer.worker_thread = worker_thread;
   return producer;
 }
@@ -54,10 +55,11 @@ void LabelOptions::Check() const {
 }
 
 LabelWriter::LabelWriter(const StereoCamera& camera, const LabelOptions& options, std::string out_dir,
-                         LabelSink sink, StereoPairLoader loader, bool worker_thread)
+                         LabelSink sink, StereoPairLoader loader, bool worker_thread, LabelSink right_sink)
     : camera_(camera),
       options_(Checked(options)),
-      producer_(camera, ProducerOptions(options, worker_thread), std::move(out_dir), std::move(sink), std::move(loader)) {}
+      producer_(camera, ProducerOptions(options, worker_thread), std::move(out_dir), std::move(sink), std::move(loader),
+                std::move(right_sink)) {}
 
 void LabelWriter::AddUser(int host) { ++hosts_[host].users; }
 

@@ -47,6 +47,8 @@ struct LabelOptions {
   // Keyframes marginalised before a frame was tracked whose points also label it.
   int past_keyframes = 6;
   bool overwrite = false;            // rewrite label files that already exist (else resume: keep them)
+  // Also write right-image labels (out_dir/right/; paper eq. of L_s uses both images).
+  bool right_labels = false;
   LabelProjectionOptions projection = DefaultProjection();  // occlusion/edge handling, ranges
   StereoCheckOptions stereo_check = DefaultStereoCheck();   // test on the labelled frame's own pair
 
@@ -65,9 +67,9 @@ class LabelWriter : public vo::OdometryObserver {
   // for statistics against ground truth. Without `loader` the stereo check is
   // skipped. With `worker_thread` the maps are produced on a worker thread
   // (sink and loader are then called from it); all are written when
-  // OnFinished() returns.
+  // OnFinished() returns. `right_sink` gets the right-image maps (options.right_labels).
   LabelWriter(const StereoCamera& camera, const LabelOptions& options, std::string out_dir, LabelSink sink = {},
-              StereoPairLoader loader = {}, bool worker_thread = false);
+              StereoPairLoader loader = {}, bool worker_thread = false, LabelSink right_sink = {});
 
   void OnFrameTracked(const vo::FrameEvent& event) override;
   void OnWindowOptimized(const vo::WindowEvent& event) override;

@@ -283,6 +283,19 @@ int VerifyLabelsWithStereo(const cv::Mat& left8, const cv::Mat& right8, const St
   return kept;
 }
 
+int VerifyRightLabelsWithStereo(const cv::Mat& left8, const cv::Mat& right8, const StereoCheckOptions& options,
+                                cv::Mat* right_labels) {
+  // Mirroring x -> W-1-x turns "right x matches left x + d" into "mirrored-right
+  // x' matches mirrored-left x' - d": the left-image test with the roles swapped.
+  cv::Mat mirrored_left, mirrored_right, mirrored_labels;
+  cv::flip(left8, mirrored_left, 1);
+  cv::flip(right8, mirrored_right, 1);
+  cv::flip(*right_labels, mirrored_labels, 1);
+  const int kept = VerifyLabelsWithStereo(mirrored_right, mirrored_left, options, &mirrored_labels);
+  cv::flip(mirrored_labels, *right_labels, 1);
+  return kept;
+}
+
 int VerifyLabelsWithStereoReference(const cv::Mat& left8, const cv::Mat& right8, const StereoCheckOptions& options,
                            cv::Mat* labels) {
   Require(left8.type() == CV_8UC1 && right8.type() == CV_8UC1 && left8.size() == right8.size() &&

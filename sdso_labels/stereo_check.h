@@ -74,6 +74,11 @@ class StereoLabelChecker {
 int VerifyLabelsWithStereo(const cv::Mat& left, const cv::Mat& right, const StereoCheckOptions& options,
                            cv::Mat* labels);
 
+// The same test for labels of the RIGHT image (right pixel x matches left
+// x + disparity): runs the left-image test on the mirrored pair.
+int VerifyRightLabelsWithStereo(const cv::Mat& left, const cv::Mat& right, const StereoCheckOptions& options,
+                                cv::Mat* right_labels);
+
 // The same test with the straightforward per-disparity window sums (slow;
 // the reference the fast checker is tested against).
 int VerifyLabelsWithStereoReference(const cv::Mat& left, const cv::Mat& right, const StereoCheckOptions& options,

@@ -259,3 +259,26 @@ TEST(LabelProducer, WorkerErrorsReachTheCaller) {
   EXPECT_TRUE(thrown);
   EXPECT_LT(producer.frames_written(), 6);
 }
+
+TEST(LabelProducer, RightLabelsSeeThePointsFromTheRightCamera) {
+  const std::string out = TempDir() + "_right";
+  std::map<int, cv::Mat> left_maps, right_maps;
+  LabelProducerOptions options;
+  options.right_labels = true;
+  LabelProducer producer(Camera(), options, out, [&](int i, const cv::Mat& m) { left_maps[i] = m.clone(); }, {},
+                         [&](int i, const cv::Mat& m) { right_maps[i] = m.clone(); });
+  LabelJob job;
+  job.frame_index = 3;
+  job.has_pose = true;
+  job.points.push_back({Eigen::Vector3d(0, 0, 10)});  // disparity fxB/z = 100 * 0.5 / 10 = 5 px
+  producer.Submit(std::move(job));
+  producer.Finish();
+  ASSERT_TRUE(left_maps.count(3) && right_maps.count(3));
+  EXPECT_FLOAT_EQ(left_maps[3].at<float>(10, 20), 5.f);
+  EXPECT_FLOAT_EQ(right_maps[3].at<float>(10, 15), 5.f);  // x_right = x_left - disparity
+  EXPECT_EQ(cv::countNonZero(right_maps[3]), 1);
+  EXPECT_TRUE(fs::exists(LabelProducer::LabelPath(out, 3, true)));
+  EXPECT_EQ(LabelProducer::LabelPath(out, 3, true), out + "/right/000003.png");
+  EXPECT_FLOAT_EQ(ReadKittiMapPng(out + "/right/000003.png").at<float>(10, 15), 5.f);
+  EXPECT_EQ(producer.counters().right_verified, 1);
+}

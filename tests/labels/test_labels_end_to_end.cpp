@@ -44,6 +44,8 @@ TEST(LabelsEndToEnd, EveryFrameLabelledAndAccurateThenResumes) {
   labels::LabelRunOptions options;
   options.progress = false;
   options.gt_disparity_dir = seq + "/disp_0";
+  options.gt_disparity_right_dir = seq + "/disp_1";
+  options.labels.right_labels = true;
   const labels::LabelRunSummary first = labels::RunLabelExtraction(seq, out, options);
   EXPECT_FALSE(first.skipped_complete);
   EXPECT_EQ(first.statistics.frames(), kFrames);
@@ -59,6 +61,10 @@ TEST(LabelsEndToEnd, EveryFrameLabelledAndAccurateThenResumes) {
   EXPECT_LT(first.statistics.mean_absolute_error(), 0.5);
   EXPECT_NEAR(first.verified_labels, first.statistics.mean_labels_per_frame() * kFrames, 0.5);
   EXPECT_GT(first.projected_labels, first.verified_labels);  // the stereo check removed some
+  // Right-image labels: as many and as accurate (the simulator's disp_1 is the right GT).
+  EXPECT_GT(first.right_statistics.mean_labels_per_frame(), 500.0);
+  EXPECT_GT(first.right_statistics.share_within_1px(), 0.95);
+  EXPECT_TRUE(fs::exists(JoinPath(out, "right/000039.png")));
   EXPECT_TRUE(fs::exists(out + "/labels_summary.json"));
   EXPECT_TRUE(fs::exists(out + "/odometry/trajectory.txt"));
 
@@ -68,6 +74,10 @@ TEST(LabelsEndToEnd, EveryFrameLabelledAndAccurateThenResumes) {
   EXPECT_EQ(second.statistics.compared(), first.statistics.compared());
   EXPECT_NEAR(second.statistics.share_within_1px(), first.statistics.share_within_1px(), 0.01);
 
+  // A missing right-image file makes the run incomplete: it is recomputed.
+  fs::remove(JoinPath(out, "right/000007.png"));
+  EXPECT_FALSE(labels::RunLabelExtraction(seq, out, options).skipped_complete);
+  EXPECT_TRUE(fs::exists(JoinPath(out, "right/000007.png")));
   // A missing file makes the run incomplete again: it is recomputed.
   fs::remove(JoinPath(out, FrameFileName(5, ".png")));
   const labels::LabelRunSummary third = labels::RunLabelExtraction(seq, out, options);

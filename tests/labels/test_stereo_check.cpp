@@ -60,6 +60,21 @@ TEST(StereoCheck, KeepsCorrectAndRejectsWrongLabels) {
   EXPECT_EQ(labels.at<float>(30, 100), 0.f);
 }
 
+TEST(StereoCheck, RightImageLabelsMatchIntoTheLeftImage) {
+  const cv::Mat left = RandomTexture(60, 160, 6);
+  const cv::Mat right = ShiftedRight(left, 12);  // right x shows left x + 12
+  StereoCheckOptions options;
+  cv::Mat labels = SingleLabel(left.size(), 60, 30, 12.0f);
+  EXPECT_EQ(VerifyRightLabelsWithStereo(left, right, options, &labels), 1);
+  EXPECT_FLOAT_EQ(labels.at<float>(30, 60), 12.0f);  // mirrored back in place
+  labels = SingleLabel(left.size(), 60, 30, 13.5f);
+  EXPECT_EQ(VerifyRightLabelsWithStereo(left, right, options, &labels), 0);
+  // The left-image test on the same label fails: it would look 12 px to the left.
+  labels = SingleLabel(left.size(), 60, 30, 12.0f);
+  cv::Mat right_as_left = right.clone();
+  EXPECT_EQ(VerifyLabelsWithStereo(right_as_left, left, options, &labels), 0);
+}
+
 TEST(StereoCheck, RejectsPeriodicTextureAndTexturelessWindows) {
   // Vertical stripes with an 8 px period: the match at the right disparity is
   // exact, but so are the ones 8 px away -> not unique.
