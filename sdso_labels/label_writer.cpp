@@ -68,6 +68,11 @@ void LabelWriter::RemoveUser(int host) {
   if (it != hosts_.end() && --it->second.users <= 0) hosts_.erase(it);
 }
 
+void LabelWriter::ReleaseRecentPast() {
+  for (int host : recent_past_) RemoveUser(host);
+  recent_past_.clear();
+}
+
 void LabelWriter::OnWindowOptimized(const vo::WindowEvent& event) {
   window_.clear();
   for (const auto& kf : event.keyframes) window_.push_back(kf.frame_index);
@@ -85,8 +90,7 @@ void LabelWriter::OnWindowOptimized(const vo::WindowEvent& event) {
 void LabelWriter::OnReset(int /*frame_index*/) {
   // Keyframes of the next map live in another world frame: never mix them in.
   for (PendingFrame& frame : pending_) frame.future_hosts_wanted = 0;
-  for (int host : recent_past_) RemoveUser(host);
-  recent_past_.clear();
+  ReleaseRecentPast();
   window_.clear();
   FlushReady();
 }
@@ -165,8 +169,7 @@ void LabelWriter::OnFinished() {
     Write(pending_.front());
     pending_.pop_front();
   }
-  for (int host : recent_past_) RemoveUser(host);
-  recent_past_.clear();
+  ReleaseRecentPast();
   producer_.Finish();
 }
 

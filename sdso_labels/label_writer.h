@@ -105,6 +105,7 @@ class LabelWriter : public vo::OdometryObserver {
   bool Usable(const vo::PointInfo& point) const;
   void AddUser(int host);
   void RemoveUser(int host);
+  void ReleaseRecentPast();  // drops the hold of every recent past keyframe
   bool Ready(const PendingFrame& frame) const;
   void FlushReady();
   void Write(const PendingFrame& frame);

@@ -21,6 +21,9 @@ void StereoCheckOptions::Check() const {
 
 namespace {
 
+constexpr float kNoMatch = 2.0f;      // cost of a window without texture (1 - ZNCC is in [0, 2])
+constexpr float kMinVariance = 1e-3f;  // windows with less intensity variance are textureless
+
 // 1 - ZNCC between the window of `left` at (x, y) and the window of `right`
 // at (x - d, y) (d < 0 searches to the right: used by the left-right check).
 float MatchCost(const cv::Mat& left, const cv::Mat& right, int x, int y, int d, int r, float left_mean,
@@ -39,7 +42,7 @@ float MatchCost(const cv::Mat& left, const cv::Mat& right, int x, int y, int d, 
     }
   }
   const float right_var = sum_sq - sum * sum / n;
-  if (right_var <= 1e-3f || left_norm <= 1e-3f) return 2.0f;
+  if (right_var <= kMinVariance || left_norm <= 1e-3f) return kNoMatch;
   return 1.0f - cross / (left_norm * std::sqrt(right_var));
 }
 
@@ -65,9 +68,6 @@ double SubPixelMinimum(const std::vector<float>& costs, int best) {
   const double denom = c0 - 2 * c1 + c2;
   return denom > 1e-9 ? best + 0.5 * (c0 - c2) / denom : best;
 }
-
-constexpr float kNoMatch = 2.0f;      // cost of a window without texture (1 - ZNCC is in [0, 2])
-constexpr float kMinVariance = 1e-3f;  // windows with less intensity variance are textureless
 
 // Window means (centred around 0, as the float images) and norms
 // sqrt(sum (I - mean)^2) of every pixel of an 8-bit image; the sums are exact
@@ -320,7 +320,7 @@ int VerifyLabelsWithStereoReference(const cv::Mat& left8, const cv::Mat& right8,
       // Every integer disparity whose right window fits in the image.
       const int max_d = std::min(x - r, options.max_disparity);
       if (max_d < 0 || label > max_d + options.max_offset) continue;
-      costs.assign(max_d + 1, 2.0f);
+      costs.assign(max_d + 1, kNoMatch);
       int best = 0;
       for (int d = 0; d <= max_d; ++d) {
         costs[d] = MatchCost(left, right, x, y, d, r, mean, norm);
@@ -328,7 +328,7 @@ int VerifyLabelsWithStereoReference(const cv::Mat& left8, const cv::Mat& right8,
       }
       const double best_sub = SubPixelMinimum(costs, best);
       if (costs[best] > options.max_cost || std::abs(best_sub - label) > options.max_offset) continue;
-      float competitor = 2.0f;
+      float competitor = kNoMatch;
       for (int d = 0; d <= max_d; ++d) {
         if (std::abs(d - best_sub) > options.exclusion) competitor = std::min(competitor, costs[d]);
       }
@@ -340,7 +340,7 @@ int VerifyLabelsWithStereoReference(const cv::Mat& left8, const cv::Mat& right8,
         if (xr < r || max_back < 0) continue;
         float right_mean = 0, right_norm = 0;
         WindowStatistics(right, xr, y, r, &right_mean, &right_norm);
-        back_costs.assign(max_back + 1, 2.0f);
+        back_costs.assign(max_back + 1, kNoMatch);
         int back_best = 0;
         for (int d = 0; d <= max_back; ++d) {
           back_costs[d] = MatchCost(right, left, xr, y, -d, r, right_mean, right_norm);

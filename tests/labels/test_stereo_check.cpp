@@ -6,6 +6,7 @@
 
 #include <opencv2/imgproc.hpp>
 #include <random>
+#include <utility>
 
 #include "core/error.h"
 #include "sdso_labels/stereo_check.h"
@@ -32,6 +33,18 @@ cv::Mat ShiftedRight(const cv::Mat& left, int disparity) {
   cv::Mat right(left.size(), CV_8U, cv::Scalar(128));
   left.colRange(disparity, left.cols).copyTo(right.colRange(0, left.cols - disparity));
   return right;
+}
+
+// A foreground square at disparity 20 over a background at disparity 8: the
+// square covers left columns [80, 110) and right columns [60, 90), rows [10, 50).
+std::pair<cv::Mat, cv::Mat> SquareOverBackground() {
+  const cv::Mat background = RandomTexture(60, 200, 2);
+  const cv::Mat foreground = RandomTexture(60, 200, 3);
+  cv::Mat left = background.clone();
+  cv::Mat right = ShiftedRight(background, 8);
+  foreground(cv::Rect(80, 10, 30, 40)).copyTo(left(cv::Rect(80, 10, 30, 40)));
+  foreground(cv::Rect(80, 10, 30, 40)).copyTo(right(cv::Rect(60, 10, 30, 40)));
+  return {left, right};
 }
 
 cv::Mat SingleLabel(const cv::Size& size, int x, int y, float disparity) {
@@ -103,12 +116,7 @@ TEST(StereoCheck, RejectsOccludedBackgroundKeepsVisibleSurfaces) {
   // Background at disparity 8, a foreground square at disparity 20 covering
   // right-image columns [60, 90) (left columns [80, 110)). Left pixels just
   // left of the square see background that is hidden in the right image.
-  const cv::Mat background = RandomTexture(60, 200, 2);
-  const cv::Mat foreground = RandomTexture(60, 200, 3);
-  cv::Mat left = background.clone();
-  cv::Mat right = ShiftedRight(background, 8);
-  foreground(cv::Rect(80, 10, 30, 40)).copyTo(left(cv::Rect(80, 10, 30, 40)));
-  foreground(cv::Rect(80, 10, 30, 40)).copyTo(right(cv::Rect(60, 10, 30, 40)));
+  const auto [left, right] = SquareOverBackground();
   StereoCheckOptions options;
   StereoLabelChecker checker(left, right, options);
   EXPECT_TRUE(checker.Keep(95, 30, 20.0f));  // foreground
@@ -118,13 +126,7 @@ TEST(StereoCheck, RejectsOccludedBackgroundKeepsVisibleSurfaces) {
 }
 
 TEST(StereoCheck, ShiftedWindowsRejectLabelsAtDepthEdges) {
-  // Foreground square at disparity 20 over a background at disparity 8 (as above).
-  const cv::Mat background = RandomTexture(60, 200, 2);
-  const cv::Mat foreground = RandomTexture(60, 200, 3);
-  cv::Mat left = background.clone();
-  cv::Mat right = ShiftedRight(background, 8);
-  foreground(cv::Rect(80, 10, 30, 40)).copyTo(left(cv::Rect(80, 10, 30, 40)));
-  foreground(cv::Rect(80, 10, 30, 40)).copyTo(right(cv::Rect(60, 10, 30, 40)));
+  const auto [left, right] = SquareOverBackground();
   StereoCheckOptions centred;
   centred.edge_shift = 0;
   centred.left_right_check = false;

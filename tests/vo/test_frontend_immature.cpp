@@ -21,16 +21,21 @@ struct Scene {
     sel.desired_points = 800;
     pixels = SelectPixels(*host, sel);
   }
+  // The rectified right camera, `baseline` metres along the host's +x axis.
+  std::unique_ptr<ImagePyramid> RightView(double baseline) const {
+    Eigen::Isometry3d T_world_right = Eigen::Isometry3d::Identity();
+    T_world_right.translation().x() = baseline;
+    cv::Mat image;
+    box.Render(cam, T_world_right, &image, nullptr);
+    return std::make_unique<ImagePyramid>(image, cam);
+  }
 };
 
 TEST(FrontendImmature, StaticStereoMatchingRecoversDepth) {
   Scene s;
   const double baseline = 0.5;
-  Eigen::Isometry3d T_world_right = Eigen::Isometry3d::Identity();
-  T_world_right.translation().x() = baseline;
-  cv::Mat right_img;
-  s.box.Render(s.cam, T_world_right, &right_img, nullptr);
-  const ImagePyramid right(right_img, s.cam);
+  const auto right_view = s.RightView(baseline);
+  const ImagePyramid& right = *right_view;
   ImmaturePointOptions opt;
   const Eigen::Vector3f Kt(static_cast<float>(-s.cam.fx * baseline), 0.f, 0.f);
   int good = 0, accurate = 0, total = 0;
@@ -56,11 +61,8 @@ TEST(FrontendImmature, StaticStereoMatchingRecoversDepth) {
 TEST(FrontendImmature, StaticStereoDirectReadsEqualInterpolation) {
   Scene s;
   const double baseline = 0.5;
-  Eigen::Isometry3d T_world_right = Eigen::Isometry3d::Identity();
-  T_world_right.translation().x() = baseline;
-  cv::Mat right_img;
-  s.box.Render(s.cam, T_world_right, &right_img, nullptr);
-  const ImagePyramid right(right_img, s.cam);
+  const auto right_view = s.RightView(baseline);
+  const ImagePyramid& right = *right_view;
   ImmaturePointOptions opt;
   const float fxb = static_cast<float>(s.cam.fx * baseline);
   const Eigen::Vector3f Kt(-fxb, 0.f, 0.f);
