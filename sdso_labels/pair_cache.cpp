@@ -32,9 +32,6 @@ void PairCachingReader::Take(int index, cv::Mat* left, cv::Mat* right) const {
       cache_.erase(cache_.begin(), cache_.upper_bound(index));
       return;
     }
-  }
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
     ++rereads_;
   }
   SequenceReadOptions pair;
