@@ -48,6 +48,10 @@ class SequenceReader {
   virtual StereoFrame Read(int index, const SequenceReadOptions& options = {}) const = 0;
   // Directory the sequence was opened from.
   virtual const std::string& root() const = 0;
+  // Name of frame i's (left) image file without folder and extension, e.g.
+  // "000042" in the KITTI layout; per-frame outputs and inputs (disparity
+  // maps) are named after it.
+  virtual std::string FrameName(int index) const = 0;
 };
 
 // Opens a sequence, detecting the layout: KITTI (calib.txt), EuRoC (mav0/ or

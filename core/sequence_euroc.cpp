@@ -142,6 +142,9 @@ class EurocSequence : public SequenceReader {
   const StereoCamera& camera() const override { return camera_; }
   const std::vector<double>& timestamps() const override { return timestamps_; }
   const std::string& root() const override { return root_; }
+  std::string FrameName(int index) const override {
+    return std::filesystem::path(left_files_.at(index)).stem().string();
+  }
 
   StereoFrame Read(int index, const SequenceReadOptions& options) const override {
     Require(index >= 0 && index < size(), root_ + ": frame " + std::to_string(index) + " out of range");
@@ -186,6 +189,9 @@ class ImageFolderSequence : public SequenceReader {
   const StereoCamera& camera() const override { return camera_; }
   const std::vector<double>& timestamps() const override { return timestamps_; }
   const std::string& root() const override { return root_; }
+  std::string FrameName(int index) const override {
+    return std::filesystem::path(files_.at(index)).stem().string();
+  }
   StereoFrame Read(int index, const SequenceReadOptions&) const override {
     Require(index >= 0 && index < size(), root_ + ": frame " + std::to_string(index) + " out of range");
     StereoFrame frame;

@@ -125,6 +125,7 @@ class KittiSequence : public SequenceReader {
   const StereoCamera& camera() const override { return camera_; }
   const std::vector<double>& timestamps() const override { return timestamps_; }
   const std::string& root() const override { return root_; }
+  std::string FrameName(int index) const override { return fs::path(files_.at(index)).stem().string(); }
 
   StereoFrame Read(int index, const SequenceReadOptions& options) const override {
     Require(index >= 0 && index < size(), root_ + ": frame " + std::to_string(index) + " out of range");

@@ -1,4 +1,4 @@
-// `dvso odometry`: direct sparse odometry (mono / stereo) over a sequence.
+// `dvso odometry`: direct sparse odometry (mono / stereo / dvso) over a sequence.
 // Thin: parses options, loads and prints the config, calls
 // vo::RunOdometryOnSequence (vo/system/sequence_runner.h).
 #include <iostream>
@@ -7,6 +7,7 @@
 #include "core/error.h"
 #include "core/sequence.h"
 #include "pipelines/commands.h"
+#include "pipelines/prediction_source.h"
 #include "vo/system/odometry_options.h"
 #include "vo/system/sequence_runner.h"
 
@@ -20,6 +21,7 @@ struct OdometryArgs {
   int count = -1;
   bool ply = false;
   bool no_progress = false;
+  PredictionSourceArgs predictions;
 };
 
 void Run(const OdometryArgs& args) {
@@ -29,10 +31,22 @@ void Run(const OdometryArgs& args) {
   options.Check();
   const std::unique_ptr<SequenceReader> sequence = OpenSequence(args.sequence, args.camera_file);
   const StereoCamera& cam = sequence->camera();
+  PredictionSource predictions;
+  if (vo::CapabilitiesOf(mode).has_predictions) {
+    predictions = OpenPredictionSource(args.predictions, *sequence);
+    // b_v resolved from the model / files unless the config sets it.
+    if (!(options.dvso.virtual_baseline > 0) || args.predictions.virtual_baseline > 0) {
+      options.dvso.virtual_baseline = predictions.virtual_baseline;
+    }
+  } else {
+    Require(args.predictions.model.empty() && args.predictions.disparity_left.empty(),
+            "--model / --disparity-left/right need --mode dvso");
+  }
   std::cout << "dvso odometry: " << args.sequence << " (" << sequence->size() << " frames, " << cam.left.width << "x"
             << cam.left.height << ", fx " << cam.left.fx << ", baseline " << cam.baseline << " m)\n"
             << "mode: " << vo::ToString(mode) << ", preset: " << args.preset
             << (args.config.empty() ? "" : ", config: " + args.config) << "\n"
+            << (predictions.source ? "predictions: " + predictions.description + "\n" : std::string())
             << "--- config ---\n"
             << vo::OdometryOptionsToYaml(options) << "--------------\n";
   vo::SequenceRunOptions run;
@@ -40,10 +54,16 @@ void Run(const OdometryArgs& args) {
   run.count = args.count;
   run.write_ply = args.ply;
   run.progress = !args.no_progress;
+  run.predictions = predictions.source.get();
   const vo::SequenceRunSummary s = vo::RunOdometryOnSequence(*sequence, options, mode, args.out, run);
   std::cout << "frames " << s.frames << ", keyframes " << s.keyframes << ", lost " << s.lost << ", initializing "
             << s.initializing << ", re-initialisations " << s.resets << "\n"
-            << "mean " << s.mean_ms << " ms/frame (max " << s.max_ms << " ms)\n";
+            << "mean " << s.mean_ms << " ms/frame (max " << s.max_ms << " ms), wall " << s.wall_ms
+            << " ms/frame incl. reading\n";
+  if (predictions.worker != nullptr) {
+    std::cout << "predictions: " << predictions.worker->prefetched_used() << " keyframes served by the speculative "
+              << "worker, " << predictions.worker->computed_on_demand() << " computed on demand\n";
+  }
   if (args.ply) std::cout << "points.ply: " << s.ply_points << " points\n";
   std::cout << "written: " << args.out << "/trajectory.txt, trajectory_tum.txt, run_log.csv, config.yaml"
             << (args.ply ? ", points.ply" : "") << "\n";
@@ -53,10 +73,13 @@ void Run(const OdometryArgs& args) {
 
 void AddOdometryCommand(CLI::App& app) {
   auto args = std::make_shared<OdometryArgs>();
-  auto* cmd = app.add_subcommand("odometry", "Direct sparse odometry (mono or stereo) over a sequence");
+  auto* cmd = app.add_subcommand("odometry", "Direct sparse odometry (mono, stereo or dvso) over a sequence");
   cmd->add_option("--sequence", args->sequence, "Sequence directory (KITTI layout, EuRoC, or image folder)")
       ->required();
-  cmd->add_option("--mode", args->mode, "mono | stereo")->check(CLI::IsMember({"mono", "stereo"}));
+  cmd->add_option("--mode", args->mode,
+                  "mono (DSO) | stereo (Stereo DSO) | dvso (monocular + predicted disparities, metric)")
+      ->check(CLI::IsMember({"mono", "stereo", "dvso"}));
+  AddPredictionOptions(cmd, &args->predictions);
   cmd->add_option("--config", args->config, "YAML options (strict keys; applied on top of the preset)");
   cmd->add_option("--preset", args->preset, "default (2000 points) | fast (800 points)")
       ->check(CLI::IsMember({"default", "fast"}));

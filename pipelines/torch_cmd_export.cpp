@@ -14,7 +14,7 @@ namespace dvso::cli {
 
 void AddExportCommand(CLI::App& app) {
   struct Args {
-    std::string checkpoint, config, out;
+    std::string checkpoint, config, out, stamp;
     bool random_init = false;
     stacknet::ExportOptions options;
   };
@@ -25,9 +25,26 @@ void AddExportCommand(CLI::App& app) {
       ->check(CLI::ExistingFile);
   cmd->add_flag("--random-init", args->random_init, "Export untrained weights (latency benchmarks)");
   cmd->add_option("--out", args->out, "Output TorchScript file (.pt)")->required();
+  cmd->add_option("--training-baseline", args->options.training_baseline,
+                  "Training camera baseline in metres (default: read from the config's sequences)");
+  cmd->add_option("--training-fx-over-width", args->options.training_fx_over_width,
+                  "Training camera f_x / image width (default: read from the config's sequences)");
+  cmd->add_option("--stamp", args->stamp,
+                  "Instead of exporting: copy this exported .pt to --out with the training camera metadata")
+      ->check(CLI::ExistingFile);
   cmd->add_option("--model", args->options.model,
                   "auto (as trained), simple (SimpleNet only) or stack (SimpleNet + ResidualNet)");
   cmd->callback([args] {
+    if (!args->stamp.empty()) {
+      ModelMetadata metadata = stacknet::ReadModelMetadata(args->stamp);
+      Require(args->options.training_baseline > 0 && args->options.training_fx_over_width > 0,
+              "--stamp needs --training-baseline and --training-fx-over-width");
+      metadata.baseline = args->options.training_baseline;
+      metadata.fx_over_width = args->options.training_fx_over_width;
+      stacknet::WriteModelWithMetadata(args->stamp, args->out, metadata);
+      std::cout << "Wrote " << args->out << " with metadata " << metadata.ToJson() << std::endl;
+      return;
+    }
     if (args->random_init) {
       Require(!args->config.empty() && args->checkpoint.empty(), "--random-init needs --config (and no --checkpoint)");
       const stacknet::StackNetConfig config = stacknet::LoadConfig(args->config, /*check=*/false);

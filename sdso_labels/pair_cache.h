@@ -28,6 +28,7 @@ class PairCachingReader : public SequenceReader {
   const StereoCamera& camera() const override { return base_.camera(); }
   const std::vector<double>& timestamps() const override { return base_.timestamps(); }
   const std::string& root() const override { return base_.root(); }
+  std::string FrameName(int index) const override { return base_.FrameName(index); }
   // Reads through the base reader and keeps the pair.
   StereoFrame Read(int index, const SequenceReadOptions& options) const override;
 

@@ -7,6 +7,7 @@
 
 #include "core/error.h"
 #include "core/fs_util.h"
+#include "core/sequence.h"
 #include "stacknet/checkpoint.h"
 #include "stacknet/config.h"
 #include "stacknet/warping.h"
@@ -15,6 +16,55 @@ namespace dvso::stacknet {
 
 void ExportOptions::Check() const {
   Require(model == "auto" || model == "simple" || model == "stack", "export model must be auto, simple or stack");
+  Require(training_baseline >= 0 && training_fx_over_width >= 0, "export training camera values must be >= 0");
+}
+
+bool TrainingCameraFromConfig(const std::string& config_yaml, double* baseline, double* fx_over_width) {
+  const StackNetConfig config = ParseConfig(config_yaml, "(embedded config)");
+  std::vector<std::string> sequences = config.data.sequences;
+  for (const auto& [name, data] : config.datasets) sequences.insert(sequences.end(), data.sequences.begin(), data.sequences.end());
+  for (const std::string& path : sequences) {
+    try {
+      const std::unique_ptr<SequenceReader> sequence = OpenSequence(path);
+      const StereoCamera& cam = sequence->camera();
+      if (!(cam.baseline > 0)) continue;
+      *baseline = cam.baseline;
+      *fx_over_width = cam.left.fx / cam.left.width;
+      return true;
+    } catch (const Error&) {
+      continue;  // not on this machine any more: try the next one
+    }
+  }
+  return false;
+}
+
+ModelMetadata ReadModelMetadata(const std::string& model_path) {
+  torch::jit::ExtraFilesMap extra{{kModelMetadataFile, ""}};
+  torch::jit::Module module;
+  try {
+    module = torch::jit::load(model_path, torch::kCPU, extra);
+  } catch (const c10::Error& e) {
+    throw Error(model_path, std::string("not a TorchScript model: ") + e.what_without_backtrace());
+  }
+  ModelMetadata m;
+  const std::string& json = extra[kModelMetadataFile];
+  if (!json.empty()) m = ModelMetadata::FromJson(json, model_path + " (" + kModelMetadataFile + ")");
+  if (m.input_width == 0 && module.hasattr("input_width") && module.hasattr("input_height")) {
+    m.input_width = static_cast<int>(module.attr("input_width").toInt());
+    m.input_height = static_cast<int>(module.attr("input_height").toInt());
+  }
+  return m;
+}
+
+void WriteModelWithMetadata(const std::string& in_path, const std::string& out_path, const ModelMetadata& metadata) {
+  torch::jit::Module module;
+  try {
+    module = torch::jit::load(in_path, torch::kCPU);
+  } catch (const c10::Error& e) {
+    throw Error(in_path, std::string("not a TorchScript model: ") + e.what_without_backtrace());
+  }
+  const torch::jit::ExtraFilesMap extra{{kModelMetadataFile, metadata.ToJson()}};
+  WriteAtomically(out_path, [&](const std::string& temp) { module.save(temp, extra); });
 }
 
 std::pair<torch::Tensor, torch::Tensor> InferPixels(StackNet& model, bool use_residual, const torch::Tensor& image) {
@@ -58,9 +108,14 @@ torch::jit::Module TraceStackNet(StackNet& model, bool use_residual, int input_h
 }
 
 namespace {
-std::string SaveTraced(StackNet& model, bool use_residual, const NetworkOptions& network, const std::string& out_path) {
+std::string SaveTraced(StackNet& model, bool use_residual, const NetworkOptions& network, ModelMetadata metadata,
+                       const std::string& out_path) {
   torch::jit::Module module = TraceStackNet(model, use_residual, network.input_height, network.input_width);
-  WriteAtomically(out_path, [&](const std::string& temp) { module.save(temp); });
+  metadata.input_width = network.input_width;
+  metadata.input_height = network.input_height;
+  metadata.model_kind = use_residual ? "stack" : "simple";
+  const torch::jit::ExtraFilesMap extra{{kModelMetadataFile, metadata.ToJson()}};
+  WriteAtomically(out_path, [&](const std::string& temp) { module.save(temp, extra); });
   int64_t parameters = 0;
   for (const auto& p : use_residual ? model->parameters() : model->simple_net()->parameters()) parameters += p.numel();
   std::ostringstream description;
@@ -75,7 +130,7 @@ std::string ExportRandomInit(const NetworkOptions& network, const std::string& m
   network.Check();
   Require(model == "simple" || model == "stack", "random-init export: model must be simple or stack");
   StackNet net(network);
-  return SaveTraced(net, model == "stack", network, out_path);
+  return SaveTraced(net, model == "stack", network, ModelMetadata{}, out_path);
 }
 
 std::string ExportCheckpoint(const std::string& checkpoint_path, const std::string& out_path,
@@ -85,7 +140,21 @@ std::string ExportCheckpoint(const std::string& checkpoint_path, const std::stri
   StackNet model = LoadModelFromCheckpoint(checkpoint_path, &info);
   const StackNetConfig config = ParseConfig(info.config_yaml, checkpoint_path + " (embedded config)");
   const bool use_residual = options.model == "stack" || (options.model == "auto" && info.trained_model == "stack");
-  return SaveTraced(model, use_residual, config.network, out_path);
+  ModelMetadata metadata;
+  metadata.config_name = config.train.output_dir;
+  metadata.baseline = options.training_baseline;
+  metadata.fx_over_width = options.training_fx_over_width;
+  if (!metadata.has_camera()) {
+    double baseline = 0, fx_over_width = 0;
+    if (TrainingCameraFromConfig(info.config_yaml, &baseline, &fx_over_width)) {
+      if (!(metadata.baseline > 0)) metadata.baseline = baseline;
+      if (!(metadata.fx_over_width > 0)) metadata.fx_over_width = fx_over_width;
+    }
+  }
+  Require(metadata.has_camera(), checkpoint_path +
+                                     ": training camera unknown (its sequences are gone): pass --training-baseline "
+                                     "and --training-fx-over-width");
+  return SaveTraced(model, use_residual, config.network, metadata, out_path);
 }
 
 }  // namespace dvso::stacknet

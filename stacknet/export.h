@@ -8,6 +8,14 @@
 // (left_disparity, right_disparity), each Nx1xHxW, in pixels of the input at
 // scale 0. All resampling is by scale factor, so other sizes (multiples of 32)
 // work too. Attributes input_height / input_width give the training size.
+//
+// Metadata: the file carries the extra file `dvso_metadata.json`
+// (core/disparity_conversion.h ModelMetadata: input size, training baseline,
+// training f_x / width, config name, model kind), from which the odometry
+// derives the virtual baseline for any camera. Python reads it with
+//   extra = {"dvso_metadata.json": ""}
+//   model = torch.jit.load("model.pt", _extra_files=extra)
+//   json.loads(extra["dvso_metadata.json"])
 #pragma once
 
 #include <torch/script.h>
@@ -15,6 +23,7 @@
 
 #include <string>
 
+#include "core/disparity_conversion.h"
 #include "stacknet/networks.h"
 
 namespace dvso::stacknet {
@@ -25,10 +34,27 @@ std::pair<torch::Tensor, torch::Tensor> InferPixels(StackNet& model, bool use_re
 // Traces the model into a TorchScript module (CPU, eval mode).
 torch::jit::Module TraceStackNet(StackNet& model, bool use_residual, int input_height, int input_width);
 
+// Name of the metadata entry in the TorchScript archive's extra files.
+inline constexpr const char* kModelMetadataFile = "dvso_metadata.json";
+
 struct ExportOptions {
   std::string model = "auto";  // auto (as trained: stack if ResidualNet was trained) | simple | stack
+  double training_baseline = 0;       // training camera baseline (m); 0 = from the config's first readable sequence
+  double training_fx_over_width = 0;  // training camera f_x / width; 0 = from the same sequence
   void Check() const;
 };
+
+// The training camera of a config: the first of its sequences (default data,
+// then named datasets) that can be opened. False when none can.
+bool TrainingCameraFromConfig(const std::string& config_yaml, double* baseline, double* fx_over_width);
+
+// Reads the metadata of a TorchScript file written by `dvso export` (input
+// size from the attributes for files without the JSON entry). Throws dvso::Error.
+ModelMetadata ReadModelMetadata(const std::string& model_path);
+
+// Re-saves an exported TorchScript file with the given metadata (e.g. to stamp
+// the training camera onto a model exported before metadata existed).
+void WriteModelWithMetadata(const std::string& in_path, const std::string& out_path, const ModelMetadata& metadata);
 
 // Loads a training checkpoint, traces it and saves TorchScript to out_path.
 // Returns a one-line description (network, size, parameters).

@@ -1,11 +1,13 @@
 #include "stacknet/predictor.h"
 
 #include <algorithm>
+#include <filesystem>
 #include <opencv2/imgproc.hpp>
 #include <vector>
 
 #include "core/error.h"
 #include "stacknet/device.h"
+#include "stacknet/export.h"
 #include "stacknet/post_process.h"
 
 namespace dvso::stacknet {
@@ -16,18 +18,24 @@ void PredictorOptions::Check() const {
 }
 
 TorchDisparityPredictor::TorchDisparityPredictor(const std::string& model_path, const PredictorOptions& options)
-    : options_(options), device_(SelectDevice(options.device, options.num_threads)) {
+    : model_path_(model_path), options_(options), device_(SelectDevice(options.device, options.num_threads)) {
   options_.Check();
+  RequireFile(std::filesystem::is_regular_file(model_path), model_path, "model file does not exist");
+  torch::jit::ExtraFilesMap extra{{kModelMetadataFile, ""}};
   try {
-    module_ = torch::jit::load(model_path, device_);
+    module_ = torch::jit::load(model_path, device_, extra);
   } catch (const c10::Error& e) {
-    throw Error(model_path, std::string("cannot load TorchScript model: ") + e.what_without_backtrace());
+    throw Error(model_path, std::string("not a TorchScript model: ") + e.what_without_backtrace());
   }
   module_.eval();
   RequireFile(module_.hasattr("input_width") && module_.hasattr("input_height"), model_path,
               "not a dvso export (no input_width/input_height attributes)");
   input_width_ = static_cast<int>(module_.attr("input_width").toInt());
   input_height_ = static_cast<int>(module_.attr("input_height").toInt());
+  const std::string& json = extra[kModelMetadataFile];
+  if (!json.empty()) metadata_ = ModelMetadata::FromJson(json, model_path + " (" + kModelMetadataFile + ")");
+  metadata_.input_width = input_width_;
+  metadata_.input_height = input_height_;
 }
 
 DisparityPair TorchDisparityPredictor::PredictImage(const cv::Mat& image) {
@@ -41,9 +49,23 @@ DisparityPair TorchDisparityPredictor::PredictImage(const cv::Mat& image) {
   if (options_.post_process) input = torch::cat({input, input.flip({3})}, 0);
   input = input.contiguous().to(device_);
   torch::NoGradGuard no_grad;
-  const auto outputs = module_.forward({input}).toTuple();
-  torch::Tensor left = outputs->elements()[0].toTensor();
-  torch::Tensor right = outputs->elements()[1].toTensor();
+  c10::IValue output;
+  try {
+    output = module_.forward({input});
+  } catch (const c10::Error& e) {
+    throw Error(model_path_, std::string("model forward failed: ") + e.what_without_backtrace());
+  }
+  const auto expected_map = [&](const c10::IValue& v) {
+    if (!v.isTensor()) return false;
+    const torch::Tensor t = v.toTensor();
+    return t.dim() == 4 && t.size(1) == 1 && t.size(2) == input_height_ && t.size(3) == input_width_ &&
+           t.scalar_type() == torch::kFloat32;
+  };
+  RequireFile(output.isTuple() && output.toTuple()->elements().size() == 2 &&
+                  expected_map(output.toTuple()->elements()[0]) && expected_map(output.toTuple()->elements()[1]),
+              model_path_, "model output is not 2 float maps (left, right disparity) of shape Nx1xHxW");
+  torch::Tensor left = output.toTuple()->elements()[0].toTensor();
+  torch::Tensor right = output.toTuple()->elements()[1].toTensor();
   if (options_.post_process) {
     left = BlendPostProcess(left.narrow(0, 0, 1), left.narrow(0, 1, 1).flip({3}));
     right = right.narrow(0, 0, 1);

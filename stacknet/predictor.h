@@ -8,6 +8,7 @@
 #include <opencv2/core.hpp>
 #include <string>
 
+#include "core/disparity_conversion.h"
 #include "core/disparity_source.h"
 
 namespace dvso::stacknet {
@@ -28,8 +29,12 @@ class TorchDisparityPredictor : public DisparitySource {
   DisparityPair Predict(int index, const cv::Mat& left_image) override { return PredictImage(left_image); }
   int input_width() const { return input_width_; }
   int input_height() const { return input_height_; }
+  // What `dvso export` stored in the file (training camera, input size, config).
+  const ModelMetadata& metadata() const { return metadata_; }
 
  private:
+  std::string model_path_;
+  ModelMetadata metadata_;
   torch::jit::Module module_;
   PredictorOptions options_;
   torch::Device device_;

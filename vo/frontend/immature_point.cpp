@@ -37,6 +37,16 @@ bool ImmaturePoint::Initialize(const PyramidLevel& host, int host_id_in, float u
   return gradient_h.trace() > 1e-6f;
 }
 
+void ImmaturePoint::SetPredictedInterval(float idepth, float relative_range, bool converged) {
+  idepth_min = idepth * (1.0f - relative_range);
+  idepth_max = idepth * (1.0f + relative_range);
+  if (!converged) return;
+  // What a successful, unambiguous search would have left behind.
+  last_status = TraceStatus::kGood;
+  last_pixel_interval = 0.0f;
+  quality = std::numeric_limits<float>::max();
+}
+
 bool ImmaturePoint::ReadyForActivation(const ImmaturePointOptions& options) const {
   // DSO activatePointsMT: a skipped / badly conditioned last search keeps the
   // interval of the previous good one.

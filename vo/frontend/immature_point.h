@@ -61,6 +61,13 @@ struct ImmaturePoint {
   // does not fit or has no gradient.
   bool Initialize(const PyramidLevel& host, int host_id, float u, float v, int selection_level);
 
+  // DVSO depth initialisation (paper section 4): the search interval becomes
+  // idepth * [1 - relative_range, 1 + relative_range] around the predicted
+  // inverse depth, so the epipolar search starts from the prediction and only
+  // refines it. `converged` marks the point ready for activation at once (the
+  // first keyframe of a map, which has nothing to trace against).
+  void SetPredictedInterval(float idepth, float relative_range, bool converged);
+
   bool HasFiniteInterval() const { return std::isfinite(idepth_max) && idepth_max > 0; }
   float IdepthEstimate() const { return 0.5f * (idepth_min + idepth_max); }
   bool ReadyForActivation(const ImmaturePointOptions& options) const;

@@ -40,6 +40,10 @@ struct FrameEvent {
   int window_keyframes = 0;
   int active_points = 0;
   int immature_points = 0;
+  // Virtual stereo term (eq. 5.8) after the last window optimisation: active
+  // residuals and their total weighted energy (0 outside DVSO mode).
+  int virtual_stereo_residuals = 0;
+  double virtual_stereo_energy = 0;
 };
 
 struct PointInfo {

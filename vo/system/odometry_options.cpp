@@ -7,10 +7,32 @@ namespace dvso::vo {
 OdometryMode ParseOdometryMode(const std::string& text) {
   if (text == "mono") return OdometryMode::kMono;
   if (text == "stereo") return OdometryMode::kStereo;
-  throw Error("unknown odometry mode '" + text + "' (expected mono or stereo)");
+  if (text == "dvso") return OdometryMode::kDvso;
+  throw Error("unknown odometry mode '" + text + "' (expected mono, stereo or dvso)");
 }
 
-std::string ToString(OdometryMode mode) { return mode == OdometryMode::kMono ? "mono" : "stereo"; }
+std::string ToString(OdometryMode mode) {
+  switch (mode) {
+    case OdometryMode::kMono: return "mono";
+    case OdometryMode::kStereo: return "stereo";
+    case OdometryMode::kDvso: return "dvso";
+  }
+  return "unknown";
+}
+
+ModeCapabilities CapabilitiesOf(OdometryMode mode) {
+  ModeCapabilities c;
+  c.has_right_image = mode == OdometryMode::kStereo;
+  c.has_predictions = mode == OdometryMode::kDvso;
+  c.needs_mono_initializer = mode == OdometryMode::kMono;
+  return c;
+}
+
+void DvsoOptions::Check() const {
+  Require(virtual_baseline >= 0, "dvso virtual_baseline must be >= 0 (0 = from the model)");
+  Require(left_right_threshold > 0, "dvso left_right_threshold must be > 0");
+  Require(init_relative_range > 0 && init_relative_range < 1, "dvso init_relative_range must be in (0, 1)");
+}
 
 void OdometryOptions::Check() const {
   Require(active_points >= 10, "active_points must be >= 10");
@@ -26,6 +48,7 @@ void OdometryOptions::Check() const {
   keyframe.Check();
   mono_init.Check();
   window.Check();
+  dvso.Check();
 }
 
 OdometryOptions OdometryOptions::Preset(const std::string& name) {

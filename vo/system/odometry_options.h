@@ -15,10 +15,34 @@
 
 namespace dvso::vo {
 
-enum class OdometryMode { kMono, kStereo };
+enum class OdometryMode {
+  kMono,    // DSO: left images only, scale from the monocular initialiser (arbitrary)
+  kStereo,  // Stereo DSO: left + right images, static stereo residuals, metric
+  kDvso,    // DVSO (paper section 4): left images + predicted D^L / D^R, metric
+};
 
-OdometryMode ParseOdometryMode(const std::string& text);  // "mono" | "stereo"; throws dvso::Error
+OdometryMode ParseOdometryMode(const std::string& text);  // "mono" | "stereo" | "dvso"; throws dvso::Error
 std::string ToString(OdometryMode mode);
+
+// What a mode brings; the System asks these instead of comparing mode names.
+struct ModeCapabilities {
+  bool has_right_image = false;         // static stereo matching of candidates and static stereo residuals
+  bool has_predictions = false;         // depth init from D^L, left-right check, virtual stereo with D^R
+  bool needs_mono_initializer = false;  // no metric depth at the first frame: two-frame monocular start
+  bool StartsMetric() const { return !needs_mono_initializer; }
+};
+ModeCapabilities CapabilitiesOf(OdometryMode mode);
+
+// DVSO-specific options (paper section 4). The virtual stereo term itself is
+// configured in WindowOptions (use_virtual_stereo, virtual_stereo_weight =
+// lambda); its baseline is set from virtual_baseline below.
+struct DvsoOptions {
+  double virtual_baseline = 0.0;       // b_v (metres) in d = D / (f_x b_v); 0 = from the model / disparity source
+  bool left_right_check = true;        // paper "lr": pixels with e_lr > threshold are not selected
+  double left_right_threshold = 1.0;   // e_lr threshold (pixels, paper: 1)
+  double init_relative_range = 0.25;   // candidates search the inverse depth in d_pred * [1 - r, 1 + r] (epipolar refinement)
+  void Check() const;
+};
 
 struct OdometryOptions {
   int active_points = 2000;           // desired active points in the window (DSO setting_desiredPointDensity)
@@ -38,6 +62,7 @@ struct OdometryOptions {
   KeyframeDecisionOptions keyframe;
   MonoInitializerOptions mono_init;
   WindowOptions window;
+  DvsoOptions dvso;
 
   OdometryOptions() {
     selector.desired_points = 1500;  // DSO setting_desiredImmatureDensity

@@ -104,6 +104,11 @@ void VisitFields(Options& o, Visitor&& v) {
   v("window", "max_log_affine_in_window", o.window.max_log_affine_in_window);
   v("window", "min_keyframes_kept", o.window.min_keyframes_kept);
   v("window", "num_threads", o.window.num_threads);
+
+  v("dvso", "virtual_baseline", o.dvso.virtual_baseline);
+  v("dvso", "left_right_check", o.dvso.left_right_check);
+  v("dvso", "left_right_threshold", o.dvso.left_right_threshold);
+  v("dvso", "init_relative_range", o.dvso.init_relative_range);
 }
 
 OdometryOptions FromSection(YamlSection& root, const OdometryOptions& base) {

@@ -55,10 +55,20 @@ int TrajectoryRecorder::CountStatus(FrameStatus status) const {
   return n;
 }
 
-RunLogWriter::RunLogWriter(const std::string& csv_path) : path_(csv_path), out_(csv_path) {
-  RequireFile(out_.good(), csv_path, "cannot write run log");
+RunLogWriter::RunLogWriter(const std::string& csv_path)
+    : path_(csv_path), partial_path_(csv_path + ".partial"), out_(partial_path_) {
+  RequireFile(out_.good(), partial_path_, "cannot write run log");
   out_ << "frame,timestamp,status,segment,reference,track_ms,optimize_ms,total_ms,rmse,hypotheses,"
-          "window_keyframes,active_points,immature_points,keyframe_score,rmse_ratio\n";
+          "window_keyframes,active_points,immature_points,keyframe_score,rmse_ratio,"
+          "virtual_stereo_residuals,virtual_stereo_energy\n";
+}
+
+RunLogWriter::~RunLogWriter() {
+  // A run that failed leaves no half-written log behind.
+  if (!finished_) {
+    out_.close();
+    std::remove(partial_path_.c_str());
+  }
 }
 
 void RunLogWriter::OnFrameTracked(const FrameEvent& e) {
@@ -66,13 +76,15 @@ void RunLogWriter::OnFrameTracked(const FrameEvent& e) {
        << e.segment << ',' << e.reference_frame_index << ',' << std::setprecision(6) << e.track_ms << ','
        << e.optimize_ms << ',' << e.total_ms << ',' << e.tracking_rmse << ',' << e.hypotheses_tried << ','
        << e.window_keyframes << ',' << e.active_points << ',' << e.immature_points << ',' << e.keyframe_score << ','
-       << e.rmse_ratio << '\n';
+       << e.rmse_ratio << ',' << e.virtual_stereo_residuals << ',' << e.virtual_stereo_energy << '\n';
 }
 
 void RunLogWriter::OnFinished() {
   out_.flush();
-  RequireFile(out_.good(), path_, "write failed");
+  RequireFile(out_.good(), partial_path_, "write failed");
   out_.close();
+  RequireFile(std::rename(partial_path_.c_str(), path_.c_str()) == 0, path_, "cannot rename the finished run log");
+  finished_ = true;
 }
 
 PlyPointWriter::PlyPointWriter(const std::string& ply_path, int min_good_residuals)

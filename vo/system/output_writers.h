@@ -45,13 +45,17 @@ class TrajectoryRecorder : public OdometryObserver {
 
 class RunLogWriter : public OdometryObserver {
  public:
+  // Streams into csv_path + ".partial", renamed to csv_path by OnFinished;
+  // a run that never finishes leaves no log (the partial file is removed).
   explicit RunLogWriter(const std::string& csv_path);
+  ~RunLogWriter() override;
   void OnFrameTracked(const FrameEvent& event) override;
   void OnFinished() override;
 
  private:
-  std::string path_;
+  std::string path_, partial_path_;
   std::ofstream out_;
+  bool finished_ = false;
 };
 
 class PlyPointWriter : public OdometryObserver {

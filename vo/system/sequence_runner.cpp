@@ -1,6 +1,7 @@
 #include "vo/system/sequence_runner.h"
 
 #include <algorithm>
+#include <chrono>
 #include <memory>
 #include <sstream>
 
@@ -23,14 +24,16 @@ SequenceRunSummary RunOdometryOnSequence(const SequenceReader& sequence, const O
                                          const SequenceRunOptions& run) {
   run.Check();
   options.Check();
-  if (mode == OdometryMode::kStereo) Require(sequence.is_stereo(), sequence.root() + ": stereo mode needs a stereo sequence");
+  const ModeCapabilities capabilities = CapabilitiesOf(mode);
+  if (capabilities.has_right_image) {
+    Require(sequence.is_stereo(), sequence.root() + ": stereo mode needs a stereo sequence");
+  }
   Require(run.first < sequence.size(), "--first " + std::to_string(run.first) + " is beyond the sequence (" +
                                            std::to_string(sequence.size()) + " frames)");
   const int end = run.count < 0 ? sequence.size() : std::min(sequence.size(), run.first + run.count);
   EnsureDirectory(out_dir);
-  SaveOdometryOptions(JoinPath(out_dir, "config.yaml"), options);
 
-  System system(options, sequence.camera(), mode);
+  System system(options, sequence.camera(), mode, run.predictions);
   TrajectoryRecorder recorder;
   RunLogWriter log(JoinPath(out_dir, "run_log.csv"));
   std::unique_ptr<PlyPointWriter> ply;
@@ -45,8 +48,9 @@ SequenceRunSummary RunOdometryOnSequence(const SequenceReader& sequence, const O
   std::unique_ptr<ProgressBar> bar;
   if (run.progress) bar = std::make_unique<ProgressBar>("odometry " + ToString(mode), end - run.first);
   SequenceReadOptions read;
-  read.load_right = mode == OdometryMode::kStereo;
+  read.load_right = capabilities.has_right_image;  // DVSO is monocular: an existing right image is not read
   double total_ms = 0;
+  const auto loop_start = std::chrono::steady_clock::now();
   for (int i = run.first; i < end; ++i) {
     const StereoFrame frame = sequence.Read(i, read);
     const FrameEvent ev = system.ProcessFrame(i, frame.timestamp, frame.left, frame.right);
@@ -61,10 +65,15 @@ SequenceRunSummary RunOdometryOnSequence(const SequenceReader& sequence, const O
     }
   }
   system.Finish();
+  summary.wall_ms = summary.frames > 0 ? std::chrono::duration<double, std::milli>(
+                                             std::chrono::steady_clock::now() - loop_start).count() / summary.frames
+                                       : 0;
   if (bar) bar->Finish();
   const Trajectory trajectory = recorder.Resolve();
   WriteKittiTrajectory(JoinPath(out_dir, "trajectory.txt"), trajectory);
   WriteTumTrajectory(JoinPath(out_dir, "trajectory_tum.txt"), trajectory);
+  // Written last: a run that failed leaves neither log nor config behind.
+  SaveOdometryOptions(JoinPath(out_dir, "config.yaml"), system.options());
   summary.keyframes = system.num_keyframes_total();
   summary.lost = recorder.CountStatus(FrameStatus::kLost);
   summary.initializing = recorder.CountStatus(FrameStatus::kInitializing);

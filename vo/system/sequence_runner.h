@@ -2,7 +2,7 @@
 // a time), and writes the outputs of `dvso odometry` into a directory:
 //   trajectory.txt      KITTI 3x4 camera-to-world, one line per processed frame, input order
 //   trajectory_tum.txt  TUM "t x y z qx qy qz qw"
-//   run_log.csv         per frame: status, timings, window sizes
+//   run_log.csv         per frame: status, timings, window sizes, virtual stereo residuals
 //   points.ply          marginalised points (optional)
 //   config.yaml         the options used
 #pragma once
@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "core/disparity_source.h"
 #include "core/sequence.h"
 #include "vo/system/observer.h"
 #include "vo/system/odometry_options.h"
@@ -22,6 +23,7 @@ struct SequenceRunOptions {
   bool write_ply = false;     // write points.ply
   bool progress = true;       // progress bar on stderr
   std::vector<OdometryObserver*> extra_observers;  // non-owning, e.g. the label writer of sdso_labels
+  DisparitySource* predictions = nullptr;          // non-owning; required by modes with predictions (DVSO)
   void Check() const;
 };
 
@@ -32,6 +34,7 @@ struct SequenceRunSummary {
   int initializing = 0;       // frames before (re-)initialisation finished
   int resets = 0;             // re-initialisations after a loss
   double mean_ms = 0;         // mean total time per frame (excl. image loading)
+  double wall_ms = 0;         // wall time per frame of the whole loop (incl. image loading)
   double max_ms = 0;
   long ply_points = 0;
 };

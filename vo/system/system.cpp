@@ -5,6 +5,7 @@
 
 #include <chrono>
 
+#include "core/disparity_conversion.h"
 #include "core/error.h"
 #include "vo/frontend/keyframe_decision.h"
 #include "vo/optimization/window.h"
@@ -27,11 +28,23 @@ std::string ToString(FrameStatus status) {
   return "unknown";
 }
 
-System::System(const OdometryOptions& options, const StereoCamera& camera, OdometryMode mode)
-    : options_(options), camera_(camera), mode_(mode), tracker_(options.tracker) {
+System::System(const OdometryOptions& options, const StereoCamera& camera, OdometryMode mode,
+               DisparitySource* predictions)
+    : options_(options),
+      camera_(camera),
+      mode_(mode),
+      capabilities_(CapabilitiesOf(mode)),
+      predictions_(predictions),
+      tracker_(options.tracker) {
   options_.Check();
   camera_.left.Check();
-  if (mode_ == OdometryMode::kStereo) Require(camera_.baseline > 0, "stereo odometry needs a baseline > 0");
+  if (capabilities_.has_right_image) Require(camera_.baseline > 0, "stereo odometry needs a baseline > 0");
+  if (capabilities_.has_predictions) {
+    Require(predictions_ != nullptr, ToString(mode_) + " odometry needs a disparity source (model or files)");
+    Require(options_.dvso.virtual_baseline > 0, ToString(mode_) + " odometry needs a virtual baseline > 0");
+    // One b_v for the depth initialisation and the eq. 5.8 residual.
+    options_.window.virtual_stereo_baseline = options_.dvso.virtual_baseline;
+  }
   if (!options_.gamma_file.empty() || !options_.vignette_file.empty()) {
     calibration_ = std::make_unique<PhotometricCalibration>(
         PhotometricCalibration::Load(options_.gamma_file, options_.vignette_file));
@@ -58,18 +71,22 @@ Eigen::Isometry3d System::ReferenceWorldToCamera() const {
 
 FrameEvent System::ProcessFrame(int frame_index, double timestamp, const cv::Mat& left, const cv::Mat& right) {
   Require(!finished_, "System::ProcessFrame after Finish");
-  if (mode_ == OdometryMode::kStereo) {
+  if (capabilities_.has_right_image) {
     Require(!right.empty(), "stereo odometry: frame " + std::to_string(frame_index) + " has no right image");
   }
   const auto start = std::chrono::steady_clock::now();
+  current_left_image_ = left;
+  // A source with a worker starts on this frame while it is tracked; only a
+  // keyframe asks for the result (FetchPrediction).
+  if (capabilities_.has_predictions) predictions_->Prefetch(frame_index, left);
   FrameEvent ev;
   ev.frame_index = frame_index;
   ev.timestamp = timestamp;
   const ImagePyramidPtr pyr = MakePyramid(left);
 
   if (!initialized_) {
-    if (mode_ == OdometryMode::kStereo) {
-      InitializeStereo(frame_index, pyr, right, last_T_world_camera_);
+    if (capabilities_.StartsMetric()) {
+      InitializeMetric(frame_index, pyr, right, last_T_world_camera_);
       ev.status = FrameStatus::kKeyframe;
       ev.reference_frame_index = frame_index;
       ev.T_world_camera = last_T_world_camera_;
@@ -96,6 +113,9 @@ FrameEvent System::ProcessFrame(int frame_index, double timestamp, const cv::Mat
     ev.active_points = window_->num_points();
   }
   for (const auto& c : candidates_) ev.immature_points += static_cast<int>(c.points.size());
+  ev.virtual_stereo_residuals = virtual_stereo_residuals_;
+  ev.virtual_stereo_energy = virtual_stereo_energy_;
+  current_left_image_.release();
   last_T_world_camera_ = ev.T_world_camera;
   for (OdometryObserver* o : observers_) o->OnFrameTracked(ev);
   return ev;
@@ -119,9 +139,9 @@ void System::TrackFrame(int frame_index, const ImagePyramidPtr& pyr, const cv::M
     Require(consecutive_lost_ <= options_.max_consecutive_lost,
             "tracking lost for " + std::to_string(consecutive_lost_) + " consecutive frames");
     ResetAfterLoss(frame_index, predicted);
-    if (mode_ == OdometryMode::kStereo) {
-      // Stereo re-initialises at once from this frame (metric depth from the pair).
-      InitializeStereo(frame_index, pyr, right, predicted);
+    if (capabilities_.StartsMetric()) {
+      // Stereo / DVSO re-initialise at once from this frame (metric depth from the pair or the prediction).
+      InitializeMetric(frame_index, pyr, right, predicted);
       ev->reference_frame_index = frame_index;
     } else {
       StepMonoInitialization(frame_index, pyr);  // this frame becomes the new first frame
@@ -168,20 +188,39 @@ void System::TrackFrame(int frame_index, const ImagePyramidPtr& pyr, const cv::M
   }
 }
 
-void System::InitializeStereo(int frame_index, const ImagePyramidPtr& left, const cv::Mat& right,
+System::KeyframePrediction System::FetchPrediction(int frame_index) {
+  Require(!current_left_image_.empty(), "System: no image for the prediction of frame " + std::to_string(frame_index));
+  DisparityPair pair = predictions_->Predict(frame_index, current_left_image_);
+  const auto check = [&](const cv::Mat& map, const char* which) {
+    Require(map.type() == CV_32FC1 && map.cols == camera_.left.width && map.rows == camera_.left.height,
+            std::string("disparity source: ") + which + " map of frame " + std::to_string(frame_index) +
+                " is not a CV_32F map of the image size");
+  };
+  check(pair.left, "left");
+  check(pair.right, "right");
+  // NaN / zero / negative predictions become "no depth here".
+  return KeyframePrediction{SanitizeDisparity(pair.left), SanitizeDisparity(pair.right)};
+}
+
+void System::InitializeMetric(int frame_index, const ImagePyramidPtr& left, const cv::Mat& right,
                               const Eigen::Isometry3d& T_world_camera) {
   window_ = std::make_unique<Window>(options_.window, camera_);
   candidates_.clear();
-  const ImagePyramidPtr right_pyr = MakePyramid(right);
   KeyframeInput input;
   input.id = frame_index;
   input.world_to_camera = T_world_camera.inverse();
   input.left = left;
-  input.right = right_pyr;
+  KeyframePrediction prediction;
+  if (capabilities_.has_right_image) input.right = MakePyramid(right);
+  if (capabilities_.has_predictions) {
+    prediction = FetchPrediction(frame_index);
+    input.right_disparity = prediction.right;
+  }
   window_->AddKeyframe(input);
-  AddCandidates(frame_index, *left, right_pyr.get());
-  // The first keyframe's stereo-matched candidates are activated at once
-  // (Stereo DSO: metric depth from the static stereo match).
+  AddCandidates(frame_index, *left, input.right.get(), capabilities_.has_predictions ? &prediction : nullptr,
+                /*converged=*/true);
+  // The first keyframe's candidates are activated at once with metric depth:
+  // from the static stereo match (Stereo DSO) or the prediction (DVSO "in").
   ActivateCandidates(frame_index, /*include_new_keyframe=*/true);
   FrameEvent unused;
   RunOptimization(&unused);

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "core/camera.h"
+#include "core/disparity_source.h"
 #include "vo/frame/photometric_calibration.h"
 #include "vo/frontend/coarse_tracker.h"
 #include "vo/frontend/immature_point.h"
@@ -25,13 +26,18 @@ namespace dvso::vo {
 class System {
  public:
   // `camera`: rectified intrinsics and baseline (baseline unused in mono).
-  System(const OdometryOptions& options, const StereoCamera& camera, OdometryMode mode);
+  // `predictions` (non-owning, must outlive the System) is required when the
+  // mode has predictions (DVSO); options.dvso.virtual_baseline must then be
+  // resolved (> 0): it converts D^L to inverse depth and is the eq. 5.8 baseline.
+  System(const OdometryOptions& options, const StereoCamera& camera, OdometryMode mode,
+         DisparitySource* predictions = nullptr);
   ~System();
 
   void AddObserver(OdometryObserver* observer);  // non-owning; must outlive the System
 
-  // Processes one frame (CV_8UC1 left; right required in stereo mode). Frames
-  // must come in increasing index order. Returns the event sent to observers.
+  // Processes one frame (CV_8UC1 left; right required when the mode has a
+  // right image, ignored otherwise). Frames must come in increasing index
+  // order. Returns the event sent to observers.
   FrameEvent ProcessFrame(int frame_index, double timestamp, const cv::Mat& left, const cv::Mat& right = cv::Mat());
 
   // Marginalises what is left (reports final keyframe poses and points) and
@@ -48,15 +54,29 @@ class System {
     std::vector<ImmaturePoint> points;
   };
 
+  // D^L / D^R of a keyframe-to-be, sanitised, at image resolution.
+  struct KeyframePrediction {
+    cv::Mat left, right;
+  };
+
   ImagePyramidPtr MakePyramid(const cv::Mat& image) const;
-  void InitializeStereo(int frame_index, const ImagePyramidPtr& left, const cv::Mat& right,
+  KeyframePrediction FetchPrediction(int frame_index);
+  // Starts a map at this frame with metric depth: static stereo matches of
+  // the right image (Stereo DSO) or predicted depths (DVSO).
+  void InitializeMetric(int frame_index, const ImagePyramidPtr& left, const cv::Mat& right,
                         const Eigen::Isometry3d& T_world_camera);
   bool StepMonoInitialization(int frame_index, const ImagePyramidPtr& left);
   void MakeKeyframe(int frame_index, const ImagePyramidPtr& left, const cv::Mat& right,
                     const Eigen::Isometry3d& T_cw, double a, double b, FrameEvent* event);
   void TraceCandidates(const ImagePyramid& frame, const Eigen::Isometry3d& T_frame_w, double a, double b);
   void ActivateCandidates(int new_keyframe_id, bool include_new_keyframe);
-  void AddCandidates(int keyframe_id, const ImagePyramid& left, const ImagePyramid* right);
+  // Selects candidate pixels of a new keyframe. With a right pyramid they are
+  // stereo matched; with a prediction their search interval comes from D^L
+  // (pixels failing the left-right check or without D^L are not selected), and
+  // `converged` makes them ready for activation at once (first keyframe).
+  void AddCandidates(int keyframe_id, const ImagePyramid& left, const ImagePyramid* right,
+                     const KeyframePrediction* prediction, bool converged);
+  void UpdateVirtualStereoStatistics();
   void RunOptimization(FrameEvent* event);
   void MarginalizeKeyframes();
   // Sends points that left the window (marginalised or dropped) to the observers.
@@ -73,6 +93,11 @@ class System {
   OdometryOptions options_;
   StereoCamera camera_;
   OdometryMode mode_;
+  ModeCapabilities capabilities_;
+  DisparitySource* predictions_ = nullptr;
+  cv::Mat current_left_image_;   // the frame being processed (predictions are asked for it)
+  int virtual_stereo_residuals_ = 0;
+  double virtual_stereo_energy_ = 0;
   std::unique_ptr<PhotometricCalibration> calibration_;
   std::vector<OdometryObserver*> observers_;
 

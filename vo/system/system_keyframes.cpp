@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 
+#include "core/disparity_conversion.h"
 #include "core/error.h"
 #include "vo/frontend/pixel_selector.h"
 #include "vo/system/system.h"
@@ -31,7 +32,9 @@ PixelTransfer MakeTransfer(const PinholeCamera& cam, const Eigen::Isometry3d& T_
 void System::MakeKeyframe(int frame_index, const ImagePyramidPtr& left, const cv::Mat& right,
                           const Eigen::Isometry3d& T_cw, double a, double b, FrameEvent* event) {
   ImagePyramidPtr right_pyr;
-  if (mode_ == OdometryMode::kStereo && !right.empty()) right_pyr = MakePyramid(right);
+  if (capabilities_.has_right_image && !right.empty()) right_pyr = MakePyramid(right);
+  KeyframePrediction prediction;
+  if (capabilities_.has_predictions) prediction = FetchPrediction(frame_index);
   KeyframeInput input;
   input.id = frame_index;
   input.world_to_camera = T_cw;
@@ -39,11 +42,13 @@ void System::MakeKeyframe(int frame_index, const ImagePyramidPtr& left, const cv
   input.b = b;
   input.left = left;
   input.right = right_pyr;
+  input.right_disparity = prediction.right;  // empty outside DVSO: no virtual stereo residuals
   window_->AddKeyframe(input);
   ActivateCandidates(frame_index, /*include_new_keyframe=*/false);
   RunOptimization(event);
   MarginalizeKeyframes();
-  AddCandidates(frame_index, *left, right_pyr.get());
+  AddCandidates(frame_index, *left, right_pyr.get(), capabilities_.has_predictions ? &prediction : nullptr,
+                /*converged=*/false);
   ++num_keyframes_total_;
   SetTrackingReference(frame_index);
   EmitWindowEvent(frame_index);
@@ -60,17 +65,35 @@ void System::TraceCandidates(const ImagePyramid& frame, const Eigen::Isometry3d&
   }
 }
 
-void System::AddCandidates(int keyframe_id, const ImagePyramid& left, const ImagePyramid* right) {
+void System::AddCandidates(int keyframe_id, const ImagePyramid& left, const ImagePyramid* right,
+                           const KeyframePrediction* prediction, bool converged) {
   KeyframeCandidates c;
   c.keyframe_id = keyframe_id;
   const std::vector<SelectedPixel> pixels = SelectPixels(left, options_.selector, &selector_block_size_);
   c.points.reserve(pixels.size());
   const Eigen::Vector3f stereo_Kt(static_cast<float>(-camera_.FxB()), 0.f, 0.f);
   const float max_disparity = static_cast<float>(options_.stereo_max_disparity_fraction * camera_.left.width);
+  const DvsoOptions& dvso = options_.dvso;
   for (const SelectedPixel& px : pixels) {
+    float predicted_idepth = 0.0f;
+    if (prediction != nullptr) {
+      // DVSO point selection (paper section 4): no point where the prediction
+      // has no depth or fails the left-right check (likely occluded).
+      if (dvso.left_right_check &&
+          LeftRightDisparityError(prediction->left, prediction->right, px.x, px.y) > dvso.left_right_threshold) {
+        continue;
+      }
+      predicted_idepth = static_cast<float>(
+          InverseDepthFromDisparity(prediction->left.at<float>(px.y, px.x), camera_.left.fx, dvso.virtual_baseline));
+      if (!(predicted_idepth > 0.0f)) continue;
+    }
     ImmaturePoint p;
     if (!p.Initialize(left.level(0), keyframe_id, static_cast<float>(px.x), static_cast<float>(px.y), px.level)) {
       continue;
+    }
+    if (prediction != nullptr) {
+      // Depth initialisation "in": d = D^L(p) / (f_x b_v); the epipolar search refines it.
+      p.SetPredictedInterval(predicted_idepth, static_cast<float>(dvso.init_relative_range), converged);
     }
     if (right != nullptr) {
       // Static stereo: the right image shares the keyframe's affine parameters.
@@ -157,7 +180,22 @@ void System::RunOptimization(FrameEvent* event) {
   // keyframes whose points are gone get marginalised.
   ReportMarginalizedPoints(window_->MarginalizeInvisiblePoints());
   window_->RemoveOutliers();
+  UpdateVirtualStereoStatistics();
   event->optimize_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
+void System::UpdateVirtualStereoStatistics() {
+  virtual_stereo_residuals_ = 0;
+  virtual_stereo_energy_ = 0;
+  for (int k = 0; k < window_->num_keyframes(); ++k) {
+    for (const Point& p : window_->keyframe(k).points) {
+      for (const Residual& r : p.residuals) {
+        if (r.kind != ResidualKind::kVirtualStereo || r.state != ResidualState::kActive) continue;
+        ++virtual_stereo_residuals_;
+        virtual_stereo_energy_ += r.energy;
+      }
+    }
+  }
 }
 
 PointInfo System::MakePointInfo(const Keyframe& host, const Point& point) const {

@@ -1,0 +1,87 @@
+#include "pipelines/prediction_source.h"
+
+#include <filesystem>
+#include <sstream>
+#include <vector>
+
+#include "core/error.h"
+#include "core/fs_util.h"
+
+namespace dvso::cli {
+
+void PredictionSourceArgs::Check() const {
+  Require(disparity_left.empty() == disparity_right.empty(), "give both --disparity-left and --disparity-right");
+  Require(disparity_left.empty() || model.empty(), "give either --model or --disparity-left/--disparity-right");
+  Require(virtual_baseline >= 0, "--virtual-baseline must be > 0");
+  Require(schedule == "speculative" || schedule == "on-demand", "--prediction-schedule must be speculative or on-demand");
+  Require(threads >= 0, "--inference-threads must be >= 0");
+}
+
+void AddPredictionOptions(CLI::App* cmd, PredictionSourceArgs* args) {
+  cmd->add_option("--model", args->model,
+                  std::string("dvso: TorchScript model from `dvso export`, run online (default: ") + kShippedModel + ")");
+  cmd->add_option("--disparity-left", args->disparity_left,
+                  "dvso: precomputed D^L: folder of KITTI uint16 PNGs named like the images, or a .npy stack "
+                  "(N,H,W) normalised by width");
+  cmd->add_option("--disparity-right", args->disparity_right, "dvso: precomputed D^R (same format)");
+  cmd->add_option("--virtual-baseline", args->virtual_baseline,
+                  "dvso: b_v in metres (default: from the model's training camera, or the sequence's baseline for files)");
+  cmd->add_option("--prediction-schedule", args->schedule,
+                  "dvso with a model: speculative (every frame on a worker while it is tracked) | on-demand (keyframes only)")
+      ->check(CLI::IsMember({"speculative", "on-demand"}));
+  cmd->add_option("--inference-threads", args->threads, "dvso with a model: inference threads (0 = cores)");
+}
+
+std::string ShippedModelPath() {
+  const std::string path = JoinPath(DVSO_SOURCE_DIR, kShippedModel);
+  return std::filesystem::is_regular_file(path) ? path : "";
+}
+
+PredictionSource OpenPredictionSource(const PredictionSourceArgs& args, const SequenceReader& sequence) {
+  args.Check();
+  PredictionSource out;
+  const PinholeCamera& cam = sequence.camera().left;
+  std::ostringstream description;
+  if (!args.disparity_left.empty()) {
+    std::vector<std::string> names;
+    names.reserve(sequence.size());
+    for (int i = 0; i < sequence.size(); ++i) names.push_back(sequence.FrameName(i));
+    out.source = std::make_unique<FileDisparitySource>(args.disparity_left, args.disparity_right, std::move(names));
+    // Precomputed disparities are taken to be in this camera's stereo geometry.
+    out.virtual_baseline = args.virtual_baseline > 0 ? args.virtual_baseline : sequence.camera().baseline;
+    Require(out.virtual_baseline > 0, sequence.root() +
+                                          ": the sequence has no stereo baseline to interpret the disparity files: "
+                                          "pass --virtual-baseline");
+    description << "disparities from files " << args.disparity_left << " / " << args.disparity_right;
+  } else {
+    std::string model = args.model;
+    if (model.empty()) {
+      model = ShippedModelPath();
+      Require(!model.empty(), std::string("the shipped model ") + kShippedModel + " is missing: pass --model");
+    }
+    ModelMetadata metadata;
+    std::unique_ptr<DisparitySource> network = OpenModelDisparitySource(model, args.threads, &metadata);
+    if (args.virtual_baseline > 0) {
+      out.virtual_baseline = args.virtual_baseline;
+    } else {
+      RequireFile(metadata.has_camera(), model,
+                  "the model carries no training camera (re-export it with `dvso export`, or pass --virtual-baseline)");
+      out.virtual_baseline = VirtualBaselineForCamera(metadata, cam.fx, cam.width);
+    }
+    description << "model " << model << " (" << metadata.input_width << "x" << metadata.input_height
+                << ", trained with baseline " << metadata.baseline << " m, fx/width " << metadata.fx_over_width
+                << "), " << args.schedule << " inference";
+    if (args.schedule == "speculative") {
+      auto worker = std::make_unique<AsyncDisparitySource>(std::move(network));
+      out.worker = worker.get();
+      out.source = std::move(worker);
+    } else {
+      out.source = std::move(network);
+    }
+  }
+  description << ", virtual baseline " << out.virtual_baseline << " m";
+  out.description = description.str();
+  return out;
+}
+
+}  // namespace dvso::cli

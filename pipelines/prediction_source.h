@@ -1,0 +1,54 @@
+// Wires a disparity source into `dvso odometry --mode dvso` (and ablation /
+// tune-baseline): precomputed maps or a TorchScript model run online on a
+// worker thread, plus the virtual baseline b_v that converts their disparities
+// to inverse depth (core/disparity_conversion.h).
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <memory>
+#include <string>
+
+#include "core/disparity_conversion.h"
+#include "core/disparity_source.h"
+#include "core/sequence.h"
+
+namespace dvso::cli {
+
+// The model `dvso odometry --mode dvso` uses when none is named (relative to the source tree).
+inline constexpr const char* kShippedModel = "models/stacknet_small.pt";
+
+struct PredictionSourceArgs {
+  std::string model;               // TorchScript file; "" = the shipped model (unless files are given)
+  std::string disparity_left;      // folder of KITTI uint16 PNGs or a .npy stack
+  std::string disparity_right;
+  double virtual_baseline = 0;     // > 0 overrides b_v
+  std::string schedule = "speculative";  // speculative (predict every frame on a worker while it is tracked) | on-demand
+  int threads = 0;                 // inference threads (0 = cores)
+  void Check() const;
+};
+
+struct PredictionSource {
+  std::unique_ptr<DisparitySource> source;  // what the odometry reads (may wrap a worker)
+  AsyncDisparitySource* worker = nullptr;   // the worker wrapper when speculative, else nullptr
+  double virtual_baseline = 0;              // resolved b_v for this sequence's camera
+  std::string description;                  // one line for the run header
+};
+
+// Opens the source for `sequence` and resolves b_v: --virtual-baseline, else
+// from the model's training camera (ModelMetadata), else (files) the
+// sequence's own stereo baseline. Every precondition (files present, model
+// loadable) is checked here, before any output is written.
+PredictionSource OpenPredictionSource(const PredictionSourceArgs& args, const SequenceReader& sequence);
+
+// Loads a TorchScript model as a DisparitySource (torch builds; others throw).
+std::unique_ptr<DisparitySource> OpenModelDisparitySource(const std::string& path, int threads,
+                                                          ModelMetadata* metadata);
+
+// Adds --model, --disparity-left/right, --virtual-baseline, --prediction-schedule,
+// --inference-threads to a subcommand.
+void AddPredictionOptions(CLI::App* cmd, PredictionSourceArgs* args);
+
+// Path of the shipped model (source tree), or "" when it is not there.
+std::string ShippedModelPath();
+
+}  // namespace dvso::cli
