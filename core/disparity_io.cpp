@@ -1,4 +1,5 @@
 #include "core/disparity_io.h"
+#include "core/disparity_source.h"
 
 #include <fcntl.h>
 #include <sys/mman.h>
@@ -127,23 +128,16 @@ cv::Mat NpyDisparityStack::Frame(int index, int image_width, int image_height) c
               "frame " + std::to_string(index) + " out of range (stack holds " + std::to_string(count_) + ")");
   const float* base = reinterpret_cast<const float*>(static_cast<const char*>(mapped_) + data_offset_) +
                       static_cast<size_t>(index) * height_ * width_;
-  cv::Mat view(height_, width_, CV_32F, const_cast<float*>(base));
+  // Non-finite values (a network's NaN) become 0 = invalid: no depth there.
+  cv::Mat view(height_, width_, CV_32F);
+  const float* src = base;
   for (int y = 0; y < height_; ++y) {
-    const float* row = view.ptr<float>(y);
-    for (int x = 0; x < width_; ++x) {
-      RequireFile(std::isfinite(row[x]), path_,
-                  "non-finite value in frame " + std::to_string(index) + " at (" + std::to_string(x) + ", " +
-                      std::to_string(y) + ")");
-    }
+    float* row = view.ptr<float>(y);
+    for (int x = 0; x < width_; ++x, ++src) row[x] = std::isfinite(*src) ? *src : 0.0f;
   }
-  cv::Mat out;
-  if (image_width != width_ || image_height != height_) {
-    cv::resize(view, out, cv::Size(image_width, image_height), 0, 0, cv::INTER_LINEAR);
-  } else {
-    out = view.clone();
-  }
-  out *= static_cast<double>(image_width);
-  return out;
+  // In pixels of the stack's own width, then resized (bilinear, values scaled with the width).
+  view *= static_cast<double>(width_);
+  return ResizeDisparity(view, image_width, image_height, DisparityResize::kBilinear);
 }
 
 void WriteNpyStack(const std::string& path, const std::vector<cv::Mat>& maps) {

@@ -30,7 +30,7 @@ class NpyDisparityStack {
   int width() const { return width_; }
   // Frame i as CV_32F in pixels of an image `image_width` wide (value * image_width),
   // resized to image_width x image_height when those differ from the stack's size.
-  // Throws dvso::Error on an out-of-range index or a NaN/Inf value.
+  // Non-finite values become 0 (invalid). Throws dvso::Error on an out-of-range index.
   cv::Mat Frame(int index, int image_width, int image_height) const;
 
  private:

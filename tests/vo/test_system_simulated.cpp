@@ -11,6 +11,7 @@
 
 #include "core/alignment.h"
 #include "core/simulator.h"
+#include "tests/vo/simulated_sequence.h"
 #include "core/trajectory.h"
 #include "vo/system/output_writers.h"
 #include "vo/system/system.h"
@@ -20,36 +21,9 @@ namespace {
 
 constexpr int kFrames = 40;
 
-struct SimulatedSequence {
-  StereoCamera camera;
-  std::vector<cv::Mat> left, right;
-  std::vector<Eigen::Isometry3d> truth;  // camera-to-world, first = identity
-  double path_length = 0;
-};
+using testing::SimulatedSequence;
 
-const SimulatedSequence& Sequence() {
-  static const SimulatedSequence seq = [] {
-    SimulatorOptions o;
-    o.trajectory_path = std::string(DVSO_TEST_DATA_DIR) + "/kitti_poses/00.txt";
-    o.first_frame = 0;
-    o.num_frames = kFrames;
-    o.camera = StereoCamera{}.Resized(416, 128);
-    o.texture_size = 256;
-    o.num_threads = 2;
-    StreetSimulator sim(o);
-    SimulatedSequence s;
-    s.camera = sim.camera();
-    for (int i = 0; i < sim.num_frames(); ++i) {
-      const SimulatedFrame f = sim.Render(i);
-      s.left.push_back(f.left.grey);
-      s.right.push_back(f.right.grey);
-      s.truth.push_back(f.T_first_camera);
-      if (i > 0) s.path_length += (s.truth[i].translation() - s.truth[i - 1].translation()).norm();
-    }
-    return s;
-  }();
-  return seq;
-}
+const SimulatedSequence& Sequence() { return testing::SimulatedKitti00(kFrames); }
 
 struct RunOutcome {
   Trajectory estimate;

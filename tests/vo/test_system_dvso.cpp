@@ -1,0 +1,283 @@
+// DVSO mode (paper section 4) of the System: mode capabilities, depth
+// initialisation from D^L ("in"), the left-right check ("lr"), and end-to-end
+// runs with the simulator's exact disparities as predictions: metric without
+// alignment, the trajectory scale following the predictions' scale, and bad
+// predictions (NaN, zero, negative) never crashing or producing NaN poses.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+
+#include "core/disparity_conversion.h"
+#include "core/error.h"
+#include "core/trajectory.h"
+#include "tests/dvso_cli_runner.h"
+#include "tests/vo/simulated_sequence.h"
+#include "vo/system/output_writers.h"
+#include "vo/system/system.h"
+
+namespace dvso::vo {
+namespace {
+
+constexpr int kFrames = 40;
+
+const testing::SimulatedSequence& Sequence() { return testing::SimulatedKitti00(kFrames); }
+
+// Serves the simulator's exact disparities, optionally scaled or damaged.
+class OracleSource : public DisparitySource {
+ public:
+  DisparityPair Predict(int index, const cv::Mat& /*image*/) override {
+    const testing::SimulatedSequence& seq = Sequence();
+    DisparityPair p{seq.disparity_left[index] * scale, seq.disparity_right[index] * scale};
+    if (damage) Damage(&p.left), Damage(&p.right);
+    if (zero) p.left.setTo(0.0f), p.right.setTo(0.0f);
+    ++calls;
+    return p;
+  }
+  static void Damage(cv::Mat* m) {
+    // Left third NaN, a middle band negative: no point may come from there.
+    (*m)(cv::Rect(0, 0, m->cols / 3, m->rows)).setTo(std::numeric_limits<float>::quiet_NaN());
+    (*m)(cv::Rect(m->cols / 3, 0, 20, m->rows)).setTo(-5.0f);
+  }
+  double scale = 1.0;
+  bool damage = false;
+  bool zero = false;
+  int calls = 0;
+};
+
+class PointCollector : public OdometryObserver {
+ public:
+  void OnWindowOptimized(const WindowEvent& e) override {
+    if (first.empty()) first = e.points;
+  }
+  std::vector<PointInfo> first;  // the points of the first window
+};
+
+struct DvsoRun {
+  Trajectory estimate;
+  int lost = 0;
+  std::vector<PointInfo> first_points;
+};
+
+DvsoRun RunDvso(OracleSource* source, OdometryOptions options, int frames = kFrames) {
+  const testing::SimulatedSequence& seq = Sequence();
+  options.dvso.virtual_baseline = seq.camera.baseline;
+  System system(options, seq.camera, OdometryMode::kDvso, source);
+  TrajectoryRecorder recorder;
+  PointCollector points;
+  system.AddObserver(&recorder);
+  system.AddObserver(&points);
+  // A right image handed in is ignored: DVSO is monocular.
+  for (int i = 0; i < frames; ++i) system.ProcessFrame(i, 0.1 * i, seq.left[i], seq.right[i]);
+  system.Finish();
+  DvsoRun r;
+  r.estimate = recorder.Resolve();
+  r.lost = recorder.CountStatus(FrameStatus::kLost);
+  r.first_points = points.first;
+  return r;
+}
+
+TEST(DvsoMode, CapabilitiesOfEachMode) {
+  const ModeCapabilities mono = CapabilitiesOf(OdometryMode::kMono);
+  EXPECT_FALSE(mono.has_right_image);
+  EXPECT_FALSE(mono.has_predictions);
+  EXPECT_TRUE(mono.needs_mono_initializer);
+  const ModeCapabilities stereo = CapabilitiesOf(OdometryMode::kStereo);
+  EXPECT_TRUE(stereo.has_right_image);
+  EXPECT_FALSE(stereo.has_predictions);
+  EXPECT_FALSE(stereo.needs_mono_initializer);
+  const ModeCapabilities dvso = CapabilitiesOf(OdometryMode::kDvso);
+  EXPECT_FALSE(dvso.has_right_image);
+  EXPECT_TRUE(dvso.has_predictions);
+  EXPECT_FALSE(dvso.needs_mono_initializer);
+  EXPECT_TRUE(dvso.StartsMetric());
+  EXPECT_EQ(ParseOdometryMode("dvso"), OdometryMode::kDvso);
+  EXPECT_EQ(ToString(OdometryMode::kDvso), "dvso");
+}
+
+TEST(DvsoMode, NeedsASourceAndAVirtualBaseline) {
+  const testing::SimulatedSequence& seq = Sequence();
+  OracleSource source;
+  OdometryOptions options;
+  EXPECT_THROW({ System s(options, seq.camera, OdometryMode::kDvso, nullptr); }, Error);
+  EXPECT_THROW({ System s(options, seq.camera, OdometryMode::kDvso, &source); }, Error);  // b_v unresolved (0)
+  options.dvso.virtual_baseline = 0.5;
+  EXPECT_NO_THROW({ System s(options, seq.camera, OdometryMode::kDvso, &source); });
+}
+
+TEST(DvsoMode, PredictedIntervalIsCentredOnThePrediction) {
+  ImmaturePoint p;
+  p.SetPredictedInterval(0.1f, 0.25f, /*converged=*/false);
+  EXPECT_FLOAT_EQ(p.idepth_min, 0.075f);
+  EXPECT_FLOAT_EQ(p.idepth_max, 0.125f);
+  EXPECT_FLOAT_EQ(p.IdepthEstimate(), 0.1f);
+  EXPECT_FALSE(p.ReadyForActivation(ImmaturePointOptions{}));  // must be traced first
+  p.SetPredictedInterval(0.1f, 0.25f, /*converged=*/true);
+  EXPECT_TRUE(p.ReadyForActivation(ImmaturePointOptions{}));   // first keyframe of a map
+}
+
+TEST(DvsoMode, FirstKeyframeDepthsComeFromTheLeftPrediction) {
+  const testing::SimulatedSequence& seq = Sequence();
+  OracleSource source;
+  OdometryOptions options;
+  options.bundle_adjustment = false;  // depths exactly as initialised
+  const DvsoRun r = RunDvso(&source, options, 1);
+  ASSERT_GT(r.first_points.size(), 100u);
+  const cv::Mat& d_left = seq.disparity_left[0];
+  for (const PointInfo& p : r.first_points) {
+    const double expected = InverseDepthFromDisparity(d_left.at<float>(static_cast<int>(p.v), static_cast<int>(p.u)),
+                                                      seq.camera.left.fx, seq.camera.baseline);
+    ASSERT_NEAR(p.idepth, expected, 1e-5 * expected) << p.u << "," << p.v;
+  }
+}
+
+TEST(DvsoMode, LeftRightCheckRemovesInconsistentPixels) {
+  // D^R of frame 0 disagrees with D^L by 3 px in the right half of the right
+  // image's columns that the right half of the left image maps to: with the
+  // check no point is selected where e_lr > 1, without it they are.
+  class InconsistentSource : public OracleSource {
+   public:
+    DisparityPair Predict(int index, const cv::Mat& image) override {
+      DisparityPair p = OracleSource::Predict(index, image);
+      p.right(cv::Rect(p.right.cols / 2, 0, p.right.cols / 2, p.right.rows)) += 3.0f;
+      return p;
+    }
+  };
+  const testing::SimulatedSequence& seq = Sequence();
+  auto count_inconsistent = [&](bool check) {
+    InconsistentSource source;
+    OdometryOptions options;
+    options.bundle_adjustment = false;
+    options.dvso.left_right_check = check;
+    int n = 0;
+    for (const PointInfo& p : RunDvso(&source, options, 1).first_points) {
+      const float d = seq.disparity_left[0].at<float>(static_cast<int>(p.v), static_cast<int>(p.u));
+      if (p.u - d >= seq.camera.left.width / 2 + 1) ++n;  // its match lies in the shifted half
+    }
+    return n;
+  };
+  EXPECT_EQ(count_inconsistent(true), 0);
+  EXPECT_GT(count_inconsistent(false), 20);
+}
+
+double MaxTranslationError(const Trajectory& estimate, const testing::SimulatedSequence& seq) {
+  double max_err = 0;
+  for (size_t i = 0; i < seq.truth.size(); ++i) {
+    max_err = std::max(max_err, (estimate.poses[i].T_world_camera.translation() - seq.truth[i].translation()).norm());
+  }
+  return max_err;
+}
+
+TEST(DvsoMode, ExactPredictionsGiveAMetricTrajectoryWithoutAlignment) {
+  const testing::SimulatedSequence& seq = Sequence();
+  OracleSource source;
+  const DvsoRun r = RunDvso(&source, OdometryOptions{});
+  ASSERT_EQ(r.estimate.size(), seq.truth.size());
+  EXPECT_EQ(r.lost, 0);
+  const double ratio = r.estimate.PathLength() / seq.path_length;
+  const double max_err = MaxTranslationError(r.estimate, seq);
+  std::cout << "dvso oracle: length ratio " << ratio << ", max error " << max_err << " m over " << seq.path_length
+            << " m, " << source.calls << " predictions\n";
+  EXPECT_NEAR(ratio, 1.0, 0.01);
+  EXPECT_LT(max_err, 0.01 * seq.path_length);
+  EXPECT_LT(source.calls, kFrames);  // only keyframes ask for predictions
+}
+
+TEST(DvsoMode, TrajectoryScaleFollowsThePredictionScale) {
+  const testing::SimulatedSequence& seq = Sequence();
+  OracleSource source;
+  source.scale = 1.1;  // disparities 10 % too large: everything 10 % closer
+  const DvsoRun r = RunDvso(&source, OdometryOptions{});
+  EXPECT_EQ(r.lost, 0);
+  const double ratio = r.estimate.PathLength() / seq.path_length;
+  std::cout << "dvso, disparities x1.1: length ratio " << ratio << "\n";
+  EXPECT_NEAR(ratio, 1.0 / 1.1, 0.015);
+}
+
+TEST(DvsoMode, NaNZeroAndNegativePredictionsAreSkippedNotFatal) {
+  const testing::SimulatedSequence& seq = Sequence();
+  OracleSource damaged;
+  damaged.damage = true;
+  OdometryOptions options;
+  options.bundle_adjustment = false;
+  const DvsoRun first = RunDvso(&damaged, options, 1);
+  ASSERT_GT(first.first_points.size(), 50u);
+  for (const PointInfo& p : first.first_points) {
+    EXPECT_GE(p.u, seq.camera.left.width / 3 + 20) << "point from a NaN / negative prediction";
+    EXPECT_TRUE(std::isfinite(p.idepth) && p.idepth > 0);
+  }
+  OracleSource damaged_full;
+  damaged_full.damage = true;
+  const DvsoRun r = RunDvso(&damaged_full, OdometryOptions{});
+  ASSERT_EQ(r.estimate.size(), seq.truth.size());
+  for (const StampedPose& pose : r.estimate.poses) EXPECT_TRUE(pose.T_world_camera.matrix().allFinite());
+  // No prediction at all: no points, every frame lost, but no crash and no NaN pose.
+  OracleSource empty;
+  empty.zero = true;
+  const DvsoRun none = RunDvso(&empty, OdometryOptions{}, 10);
+  ASSERT_EQ(none.estimate.size(), 10u);
+  for (const StampedPose& pose : none.estimate.poses) EXPECT_TRUE(pose.T_world_camera.matrix().allFinite());
+}
+
+}  // namespace
+}  // namespace dvso::vo
+
+namespace dvso::vo {
+namespace {
+
+std::string ReadText(const std::string& path) {
+  std::ifstream in(path);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+TEST(DvsoCli, RunsOnDisparityFilesAndRejectsBadInputWithOneLineNothingWritten) {
+  const std::string dir = ::testing::TempDir() + "/dvso_mode_cli";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  const std::string seq = dir + "/seq";
+  ASSERT_EQ(dvso::testing::RunDvso("simulate --quiet --out " + seq +
+                                   " --count 12 --width 320 --height 96 --texture-size 128").exit_code, 0);
+  const std::string files = " --disparity-left " + seq + "/disp_0 --disparity-right " + seq + "/disp_1";
+  const auto good = dvso::testing::RunDvso("odometry --mode dvso --no-progress --sequence " + seq + " --out " + dir +
+                                           "/good" + files);
+  ASSERT_EQ(good.exit_code, 0) << good.out;
+  EXPECT_NE(good.out.find("virtual baseline"), std::string::npos);
+  EXPECT_EQ(ReadTrajectory(dir + "/good/trajectory.txt", TrajectoryFormat::kKitti).size(), 12u);
+  const std::string log = ReadText(dir + "/good/run_log.csv");
+  EXPECT_NE(log.find("virtual_stereo_residuals,virtual_stereo_energy"), std::string::npos);
+
+  // A missing map: one line naming the file, exit 1, no output files.
+  std::filesystem::remove(seq + "/disp_1/000007.png");
+  const auto missing = dvso::testing::RunDvso("odometry --mode dvso --no-progress --sequence " + seq + " --out " +
+                                              dir + "/missing" + files);
+  EXPECT_EQ(missing.exit_code, 1);
+  EXPECT_NE(missing.out.find("disp_1/000007.png"), std::string::npos) << missing.out;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/missing/trajectory.txt"));
+  EXPECT_FALSE(std::filesystem::exists(dir + "/missing/run_log.csv"));
+
+  // A model file that is not TorchScript (or a build without LibTorch): one clear line.
+  std::ofstream(dir + "/fake.pt") << "not a model";
+  const auto fake = dvso::testing::RunDvso("odometry --mode dvso --no-progress --sequence " + seq + " --out " + dir +
+                                           "/fake --model " + dir + "/fake.pt");
+  EXPECT_EQ(fake.exit_code, 1);
+  EXPECT_NE(fake.out.find(dir + "/fake.pt"), std::string::npos) << fake.out;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/fake/trajectory.txt"));
+
+  // A .npy stack of the wrong dtype.
+  std::ofstream(dir + "/bad.npy", std::ios::binary)
+      << std::string("\x93NUMPY\x01\x00", 8) << std::string("\x53\x00", 2)
+      << "{'descr': '<f8', 'fortran_order': False, 'shape': (12, 96, 320), }                \n";
+  const auto dtype = dvso::testing::RunDvso("odometry --mode dvso --no-progress --sequence " + seq + " --out " + dir +
+                                            "/dtype --disparity-left " + dir + "/bad.npy --disparity-right " + dir +
+                                            "/bad.npy");
+  EXPECT_EQ(dtype.exit_code, 1);
+  EXPECT_NE(dtype.out.find("bad.npy"), std::string::npos) << dtype.out;
+  // Prediction options outside dvso mode are a usage error.
+  EXPECT_NE(dvso::testing::RunDvso("odometry --mode mono --sequence " + seq + " --out " + dir + "/m" + files).exit_code,
+            0);
+}
+
+}  // namespace
+}  // namespace dvso::vo
