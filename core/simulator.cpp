@@ -10,6 +10,10 @@
 #include "core/trajectory.h"
 
 namespace dvso {
+namespace {
+constexpr double kVariedCameraHeightRange = 0.1;  // varied look: camera height 1.65 +- this (m)
+constexpr double kVariedHeightJitter = 0.03;      // varied look: per-frame height bounce bound (m)
+}  // namespace
 
 void SimulatorOptions::Check() const {
   Require(first_frame >= 0, "--first must be >= 0");
@@ -35,10 +39,20 @@ void SimulatorOptions::Check() const {
   Require(scene.building_density >= 0 && scene.building_density <= 1, "building density must be in [0, 1]");
   Require(scene.car_density >= 0 && scene.car_density <= 1, "car density must be in [0, 1]");
   Require(scene.tree_density >= 0 && scene.tree_density <= 5, "tree density must be in [0, 5]");
+  Require(exposure_level > 0.05 && exposure_level < 4, "exposure level must be in (0.05, 4)");
+  Require(height_jitter >= 0 && height_jitter < 0.5, "height jitter must be in [0, 0.5) m");
 }
 
 StreetSimulator::StreetSimulator(const SimulatorOptions& options) : options_(options) {
   options_.Check();
+  if (options_.vary_appearance) {
+    options_.scene.appearance = sim::RandomAppearance(options_.seed);
+    std::mt19937_64 look_rng(options_.seed * 0x9E3779B97F4A7C15ull + 0x1F2Eu);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    options_.exposure_level = 0.6 + 0.5 * unit(look_rng);
+    options_.camera_height += kVariedCameraHeightRange * (2 * unit(look_rng) - 1);
+    options_.height_jitter = std::max(options_.height_jitter, kVariedHeightJitter);
+  }
   // Trajectory: from file or generated.
   if (!options_.trajectory_path.empty()) {
     const Trajectory trajectory = ReadTrajectory(options_.trajectory_path, TrajectoryFormat::kKitti);
@@ -87,6 +101,19 @@ StreetSimulator::StreetSimulator(const SimulatorOptions& options) : options_(opt
     log_gain_.push_back(a);
     bias_.push_back(b);
   }
+  // Height bounce: a smooth mean-reverting walk in [-jitter, jitter], applied to
+  // the rendered poses after the road was laid, so GT poses include it.
+  height_offset_.assign(num_frames(), 0.0);
+  if (options_.height_jitter > 0) {
+    std::mt19937_64 bounce(options_.seed * 0xD1B54A32D192ED03ull + 77u);
+    double h = 0, v = 0;
+    for (int i = 0; i < num_frames(); ++i) {
+      v = 0.6 * v + 0.35 * options_.height_jitter * gauss(bounce) - 0.2 * h;
+      h = std::clamp(h + v, -options_.height_jitter, options_.height_jitter);
+      height_offset_[i] = h;
+      trajectory_[frame_poses_[i]].translation() += h * path_->down();
+    }
+  }
 }
 
 StreetSimulator::~StreetSimulator() = default;
@@ -95,7 +122,7 @@ sim::Photometric StreetSimulator::Exposure(int i, int view) const {
   Require(i >= 0 && i < num_frames(), "frame index out of range");
   sim::Photometric p;
   // Overall exposure 0.85 leaves head room for bright facades and sky.
-  p.gain = 0.85 * std::exp(log_gain_[i]);
+  p.gain = options_.exposure_level * std::exp(log_gain_[i]);
   p.bias = bias_[i];
   p.vignetting_strength = options_.vignetting ? options_.vignetting_strength : 0.0;
   p.noise_sigma = options_.noise ? options_.noise_sigma : 0.0;

@@ -44,6 +44,12 @@ struct SimulatorOptions {
   bool edge_antialiasing = true;    // 4 extra samples on silhouette / crease pixels
   int num_threads = 2;              // render threads
   int texture_size = 512;           // procedural texture resolution (power of two)
+  double exposure_level = 0.85;     // overall gain of the camera model (head room for bright facades and sky)
+  double height_jitter = 0.0;       // camera height bounce (m, bound of a smooth per-frame offset); GT poses include it
+  // Varied look drawn from the seed: scene.appearance = RandomAppearance(seed),
+  // exposure level 0.6-1.1, camera height +-0.1 m, height jitter 0.03 m
+  // (applied by the constructor; `dvso simulate --appearance varied`).
+  bool vary_appearance = false;
 
   // Throws dvso::Error naming the offending option.
   void Check() const;
@@ -81,6 +87,7 @@ class StreetSimulator {
   std::vector<int> frame_poses_;                  // trajectory index of each output frame
   std::vector<Eigen::Isometry3d> trajectory_;     // all poses, camera-to-world
   std::vector<double> log_gain_, bias_;           // per output frame
+  std::vector<double> height_offset_;             // camera offset along "down" per output frame (m)
   std::unique_ptr<sim::StreetPath> path_;
   std::unique_ptr<sim::TextureBank> textures_;
   sim::Scene scene_;

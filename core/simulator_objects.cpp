@@ -75,8 +75,21 @@ void AddBuilding(Placement& pl, const Vec3& front_mid, const Vec3& forward, cons
   // One storey below the sidewalk, so that the facade tiles' storeys start at sidewalk level.
   const double below = 3.2 - pl.options.curb_height;
   const Vec3 base = front_mid + inward * (0.5 * depth) + pl.scene->down * below;
-  Surface facade = Textured(kTexFacadePlaster + static_cast<int>(pl.unit(pl.rng) * kNumFacadeStyles) % kNumFacadeStyles,
-                            pl.Colour(kFacadeColours), 0.15f, 0.35f);
+  const Appearance& look = pl.options.appearance;
+  // Colour before style: the draw order of the original look (GCC evaluated the
+  // arguments of the former one-line call right to left).
+  Eigen::Vector3f colour = pl.Colour(kFacadeColours);
+  const int style = static_cast<int>(pl.unit(pl.rng) * look.facade_styles) % look.facade_styles;
+  if (look.facade_free_colour > 0 && pl.Chance(look.facade_free_colour)) {
+    // Any hue, mild saturation, any brightness.
+    const double hue = pl.U(0, 6), sat = pl.U(0.05, 0.5), val = pl.U(0.35, 1.0);
+    const int k = static_cast<int>(hue) % 6;
+    const double f = hue - std::floor(hue);
+    const double p = val * (1 - sat), q = val * (1 - sat * f), t = val * (1 - sat * (1 - f));
+    const double rgb[6][3] = {{val, t, p}, {q, val, p}, {p, val, t}, {p, q, val}, {t, p, val}, {val, p, q}};
+    colour = Eigen::Vector3f(static_cast<float>(rgb[k][0]), static_cast<float>(rgb[k][1]), static_cast<float>(rgb[k][2]));
+  }
+  Surface facade = Textured(FacadeTexture(style), colour, 0.15f, 0.35f);
   facade.overlay = Overlay::kPlinth;
   facade.overlay_a = static_cast<float>(pl.U(0.4, 1.0));  // plinth height (m)
   facade.overlay_b = 3.2f;                                 // metres from the box bottom to the sidewalk
@@ -126,7 +139,21 @@ void BuildingRow(Placement& pl, int side, bool far, double s_begin, double s_end
   }
 }
 
-void AddCar(Placement& pl, const Vec3& base, const Vec3& forward, double length) {
+// Body and cabin proportions of a parked car.
+struct CarShape {
+  double body_height;     // body box height above its 0.3 m lift (m)
+  double cabin_fraction;  // cabin length / car length
+  double cabin_shift;     // cabin centre behind the car centre, fraction of the length
+  double cabin_height;    // m
+  double min_length, max_length;  // m
+};
+// Sedan (the original shape), hatchback, estate, SUV, van.
+constexpr CarShape kCarShapes[] = {{0.675, 0.525, 0.05, 0.50, 3.8, 4.8},  {0.65, 0.55, 0.16, 0.55, 3.4, 4.1},
+                                   {0.68, 0.68, 0.12, 0.52, 4.4, 4.9},   {0.85, 0.58, 0.08, 0.62, 4.2, 4.9},
+                                   {1.25, 0.78, 0.08, 0.55, 4.6, 5.4}};
+constexpr int kNumCarShapes = sizeof(kCarShapes) / sizeof(kCarShapes[0]);
+
+void AddCar(Placement& pl, const Vec3& base, const Vec3& forward, double length, int shape) {
   const Eigen::Vector3f colour = pl.Colour(kCarColours);
   const Vec3 up = pl.builder->up();
   pl.builder->BeginChunk();
@@ -152,14 +179,23 @@ void AddCar(Placement& pl, const Vec3& base, const Vec3& forward, double length)
     for (int wheel_side = -1; wheel_side <= 1; wheel_side += 2)
       pl.builder->AddBox(base + forward * (axle * length * 0.33) + shadow.frame_right * (wheel_side * width * 0.4),
                          forward, 0.62, 0.24, 0.36, rubber, 1.0);
-  pl.builder->AddShadowBox(base + up * 0.3, forward, length, width, pl.U(0.6, 0.75), paint, 2.0);
-  const double cabin = length * pl.U(0.45, 0.6);
   Surface roof = paint;
   roof.axis_u = forward / 2.0;
   roof.axis_v = shadow.frame_right / 2.0;
   roof.origin = base;
-  pl.builder->AddShadowBox(base + up * 0.95 - forward * (length * 0.05), forward, cabin, width - 0.12,
-                           pl.U(0.45, 0.55), glass, 1.0, pl.builder->AddSurface(roof));
+  if (shape < 0) {  // the original sedan, drawn exactly as before
+    pl.builder->AddShadowBox(base + up * 0.3, forward, length, width, pl.U(0.6, 0.75), paint, 2.0);
+    const double cabin = length * pl.U(0.45, 0.6);
+    pl.builder->AddShadowBox(base + up * 0.95 - forward * (length * 0.05), forward, cabin, width - 0.12,
+                             pl.U(0.45, 0.55), glass, 1.0, pl.builder->AddSurface(roof));
+  } else {
+    const CarShape& c = kCarShapes[shape];
+    const double body = c.body_height * pl.U(0.92, 1.08);
+    pl.builder->AddShadowBox(base + up * 0.3, forward, length, width, body, paint, 2.0);
+    const double cabin = length * c.cabin_fraction * pl.U(0.92, 1.05);
+    pl.builder->AddShadowBox(base + up * (0.3 + body) - forward * (length * c.cabin_shift), forward, cabin,
+                             width - 0.12, c.cabin_height * pl.U(0.9, 1.1), glass, 1.0, pl.builder->AddSurface(roof));
+  }
   // Lights and number plates: small boxes on the front and the back.
   const Vec3 right = shadow.frame_right;
   Surface lamp = Textured(kTexCarPaint, {1.f, 1.f, 0.95f}, 0.f, 0.f);
@@ -190,11 +226,12 @@ void ParkedCars(Placement& pl, int side, double s_begin, double s_end) {
       s += pl.U(5, 14);
       continue;
     }
-    const double length = pl.U(3.8, 4.8);
+    const int shape = pl.options.appearance.car_shapes ? static_cast<int>(pl.U(0, kNumCarShapes)) % kNumCarShapes : -1;
+    const double length = shape < 0 ? pl.U(3.8, 4.8) : pl.U(kCarShapes[shape].min_length, kCarShapes[shape].max_length);
     const PathSample& mid = pl.At(s + length / 2);
     const Vec3 base = mid.road + mid.right * (sign * (pl.Edge(mid, side) - 1.15 - pl.U(0, 0.15)));
     const Vec3 forward = (pl.Chance(0.8) ? 1.0 : -1.0) * mid.tangent;
-    if (pl.Free(base, forward, length, 1.9, Zone::kLane, 0.3)) AddCar(pl, base, forward, length);
+    if (pl.Free(base, forward, length, 1.9, Zone::kLane, 0.3)) AddCar(pl, base, forward, length, shape);
     s += length + pl.U(0.8, 6.0);
   }
 }
@@ -202,9 +239,9 @@ void ParkedCars(Placement& pl, int side, double s_begin, double s_end) {
 void AddTree(Placement& pl, const Vec3& base, double trunk_height, double crown_h, double crown_v) {
   const Vec3 up = pl.builder->up();
   pl.builder->BeginChunk();
-  Surface bark = Textured(kTexBark, {0.55f, 0.45f, 0.38f}, 0.f, 0.f);
+  Surface bark = Textured(kTexBark, pl.options.appearance.bark_tint, 0.f, 0.f);
   pl.builder->AddCylinder(base - up * 0.3, pl.U(0.12, 0.25), trunk_height + 0.3 + crown_v * 0.5, 8, bark, 1.0);
-  Surface leaves = Textured(kTexLeaves, Eigen::Vector3f(0.62f, 0.80f, 0.42f) * static_cast<float>(pl.U(0.85, 1.15)),
+  Surface leaves = Textured(kTexLeaves, pl.options.appearance.leaves_tint * static_cast<float>(pl.U(0.85, 1.15)),
                             0.3f, 0.4f);
   pl.builder->AddBlob(base + up * (trunk_height + crown_v * 0.8), crown_h, crown_v, leaves, 1.5, pl.rng());
   pl.builder->EndChunk();
@@ -239,7 +276,7 @@ void Vegetation(Placement& pl, int side, double s_begin, double s_end) {
       // Hedge or bush behind the verge.
       const double lateral = pl.Edge(p, side) + pl.Walk(p, side) + pl.U(0.5, 2.0);
       const Vec3 base = p.road + p.right * (sign * lateral) + pl.builder->up() * pl.options.curb_height;
-      Surface leaves = Textured(kTexLeaves, {0.55f, 0.72f, 0.38f}, 0.2f, 0.3f);
+      Surface leaves = Textured(kTexLeaves, pl.options.appearance.hedge_tint, 0.2f, 0.3f);
       if (pl.Chance(0.5)) {
         const double length = pl.U(4, 12);
         const Vec3 centre = base + p.right * (sign * 0.6);

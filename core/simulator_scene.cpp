@@ -285,12 +285,13 @@ void BuildStreetSurfaces(const StreetPath& path, const SceneOptions& options, Sc
       under[side][j] = std::max(verge[side][j], FreeExtent(path, j, sign, edge, 70.0, 4.0, Zone::kRoad));
     }
   }
-  const Surface asphalt = GroundSurface(*scene, kTexAsphalt, 2.5, {0.95f, 0.95f, 1.0f}, 4);
+  const Appearance& look = options.appearance;
+  const Surface asphalt = GroundSurface(*scene, look.road_texture, 2.5, look.road_tint, 4);
   const int plain_asphalt = builder->AddSurface(asphalt);
-  const int paving = builder->AddSurface(GroundSurface(*scene, kTexPaving, 2.0, {0.92f, 0.88f, 0.84f}, 4));
-  const int grass = builder->AddSurface(GroundSurface(*scene, kTexGrass, 2.0, {0.55f, 0.75f, 0.40f}, 3));
-  const int dirt = builder->AddSurface(GroundSurface(*scene, kTexDirt, 3.0, {0.80f, 0.72f, 0.60f}, 3));
-  const int underlay = builder->AddSurface(GroundSurface(*scene, kTexDirt, 3.0, {0.65f, 0.62f, 0.55f}, 2));
+  const int paving = builder->AddSurface(GroundSurface(*scene, kTexPaving, 2.0, look.paving_tint, 4));
+  const int grass = builder->AddSurface(GroundSurface(*scene, look.grass_texture, 2.0, look.grass_tint, 3));
+  const int dirt = builder->AddSurface(GroundSurface(*scene, kTexDirt, 3.0, look.dirt_tint, 3));
+  const int underlay = builder->AddSurface(GroundSurface(*scene, kTexDirt, 3.0, look.underlay_tint, 2));
 
   for (int j = 0; j + 1 < n; ++j) {
     const PathSample& a = samples[j];
@@ -362,6 +363,51 @@ void BuildStreetSurfaces(const StreetPath& path, const SceneOptions& options, Sc
 
 }  // namespace
 
+Appearance RandomAppearance(uint64_t seed) {
+  std::mt19937_64 rng(seed * 0x2545F4914F6CDD1Dull + 0x9E37u);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  auto U = [&](double lo, double hi) { return static_cast<float>(lo + (hi - lo) * unit(rng)); };
+  // Tint: base colour with a brightness factor and a small per-channel change.
+  auto Tint = [&](const Eigen::Vector3f& base, double lo, double hi, double hue) {
+    const float v = U(lo, hi);
+    Eigen::Vector3f t(base.x() * (1 + U(-hue, hue)), base.y() * (1 + U(-hue, hue)), base.z() * (1 + U(-hue, hue)));
+    return Eigen::Vector3f((t * v).cwiseMin(1.f).cwiseMax(0.02f));
+  };
+  Appearance a;
+  a.varied = true;
+  const double overcast = unit(rng) < 0.3 ? U(0.6, 1.0) : U(0.0, 0.4);  // 0 = clear sky, 1 = overcast
+  a.sun_elevation_min_deg = 12;
+  a.sun_elevation_max_deg = 70;
+  a.sun_strength = (1 - 0.85 * overcast) * U(0.65, 1.0);
+  a.sky_light = 0.45 + 0.3 * overcast + U(-0.08, 0.08);
+  a.sky_light_up = U(0.1, 0.3);
+  const float warmth = U(-0.12, 0.15);  // > 0: warm (evening) light, < 0: cold
+  a.light_colour = Eigen::Vector3f(1 + warmth, 1.f, 1 - warmth);
+  const Eigen::Vector3f grey_sky(0.82f, 0.83f, 0.85f);
+  const float ov = static_cast<float>(overcast);
+  a.sky_horizon = Eigen::Vector3f(0.93f, 0.94f, 0.96f) * (1 - ov) + grey_sky * ov;
+  a.sky_zenith = (Eigen::Vector3f(U(0.40, 0.65), U(0.55, 0.75), U(0.85, 0.97)) * (1 - ov) + grey_sky * 0.9f * ov);
+  a.cloud_threshold = static_cast<float>(U(0.1, 0.6) - 0.3 * overcast);
+  a.road_texture = unit(rng) < 0.3 ? kTexRoadConcrete : kTexAsphalt;
+  a.road_tint = Tint(a.road_texture == kTexAsphalt ? Eigen::Vector3f(0.95f, 0.95f, 1.0f) : Eigen::Vector3f(0.9f, 0.9f, 0.88f),
+                     0.6, 1.25, 0.06);
+  a.paving_tint = Tint({0.92f, 0.88f, 0.84f}, 0.6, 1.1, 0.12);
+  a.grass_texture = unit(rng) < 0.35 ? kTexGrassDry : kTexGrass;
+  // Grass and leaves from fresh green to dry yellow / autumn orange.
+  const float dry = U(0.0, 1.0) * (a.grass_texture == kTexGrassDry ? 1.f : 0.4f);
+  a.grass_tint = Tint(Eigen::Vector3f(0.55f + 0.25f * dry, 0.75f - 0.05f * dry, 0.40f - 0.1f * dry), 0.7, 1.15, 0.08);
+  const float autumn = unit(rng) < 0.25 ? U(0.3, 1.0) : 0.f;
+  a.leaves_tint = Tint(Eigen::Vector3f(0.62f + 0.35f * autumn, 0.80f - 0.15f * autumn, 0.42f - 0.15f * autumn), 0.6, 1.15, 0.1);
+  a.hedge_tint = Tint({0.55f, 0.72f, 0.38f}, 0.6, 1.15, 0.1);
+  a.dirt_tint = Tint({0.80f, 0.72f, 0.60f}, 0.7, 1.15, 0.1);
+  a.underlay_tint = Tint({0.65f, 0.62f, 0.55f}, 0.7, 1.15, 0.1);
+  a.bark_tint = Tint({0.55f, 0.45f, 0.38f}, 0.6, 1.3, 0.1);
+  a.facade_styles = kNumFacadeStyles + kNumExtraFacadeStyles;
+  a.facade_free_colour = U(0.2, 0.7);
+  a.car_shapes = true;
+  return a;
+}
+
 Scene BuildStreetScene(StreetPath& path, const SceneOptions& options, uint64_t seed) {
   Require(options.building_density >= 0 && options.building_density <= 1, "building density must be in [0, 1]");
   Require(options.car_density >= 0 && options.car_density <= 1, "car density must be in [0, 1]");
@@ -371,10 +417,14 @@ Scene BuildStreetScene(StreetPath& path, const SceneOptions& options, uint64_t s
   scene.down = path.down();
   scene.horizontal_a = scene.down.unitOrthogonal();
   scene.horizontal_b = scene.down.cross(scene.horizontal_a);
-  // Sun: 35-60 degrees above the horizon, azimuth from the seed.
+  scene.appearance = options.appearance;
+  // Sun: elevation in the appearance's range (35-60 degrees by default), azimuth from the seed.
   std::mt19937_64 rng(seed * 101u + 3u);
   std::uniform_real_distribution<double> u(0.0, 1.0);
-  const double azimuth = 2 * M_PI * u(rng), elevation = (35 + 25 * u(rng)) * M_PI / 180;
+  const Appearance& look = options.appearance;
+  const double azimuth = 2 * M_PI * u(rng);
+  const double elevation =
+      (look.sun_elevation_min_deg + (look.sun_elevation_max_deg - look.sun_elevation_min_deg) * u(rng)) * M_PI / 180;
   scene.to_sun = (std::cos(elevation) * (std::cos(azimuth) * scene.horizontal_a + std::sin(azimuth) * scene.horizontal_b) -
                   std::sin(elevation) * scene.down)
                      .normalized();

@@ -66,6 +66,41 @@ struct Chunk {
   int begin = 0, end = 0;  // triangle range
 };
 
+// Look of a world: light, sky, material colours and textures, car shapes. The
+// defaults are the original fixed look (renders do not change with them);
+// RandomAppearance(seed) draws a varied one, so that a network trained on many
+// seeds does not learn a single look.
+struct Appearance {
+  double sun_elevation_min_deg = 35;  // sun elevation drawn per seed in [min, max] (degrees)
+  double sun_elevation_max_deg = 60;
+  double sun_strength = 0.75;          // direct light on a surface facing the sun
+  double sky_light = 0.55;             // ambient (sky) light on walls
+  double sky_light_up = 0.2;           // extra ambient light on upward-facing surfaces
+  Eigen::Vector3f light_colour{1.f, 1.f, 1.f};  // RGB multiplier of sun and sky light (warm / cold light)
+  Eigen::Vector3f sky_horizon{0.93f, 0.94f, 0.96f};  // sky radiance at the horizon
+  Eigen::Vector3f sky_zenith{0.55f, 0.68f, 0.90f};   // sky radiance at the zenith
+  float cloud_threshold = 0.3f;       // cloud texture value where clouds start (lower = more clouds)
+  int road_texture = kTexAsphalt;     // kTexAsphalt or kTexRoadConcrete
+  Eigen::Vector3f road_tint{0.95f, 0.95f, 1.0f};
+  Eigen::Vector3f paving_tint{0.92f, 0.88f, 0.84f};
+  int grass_texture = kTexGrass;      // kTexGrass or kTexGrassDry
+  Eigen::Vector3f grass_tint{0.55f, 0.75f, 0.40f};
+  Eigen::Vector3f dirt_tint{0.80f, 0.72f, 0.60f};
+  Eigen::Vector3f underlay_tint{0.65f, 0.62f, 0.55f};
+  Eigen::Vector3f leaves_tint{0.62f, 0.80f, 0.42f};  // tree crowns (x 0.85..1.15 per tree)
+  Eigen::Vector3f hedge_tint{0.55f, 0.72f, 0.38f};
+  Eigen::Vector3f bark_tint{0.55f, 0.45f, 0.38f};
+  int facade_styles = kNumFacadeStyles;  // styles drawn from: 4 = the original, 6 adds siding and glass
+  float facade_free_colour = 0.f;     // probability that a building's colour is any hue (else the palette)
+  bool car_shapes = false;            // sedans, hatchbacks, estates, SUVs and vans instead of one sedan shape
+  bool varied = false;                // drawn by RandomAppearance (recorded in simulation.yaml)
+};
+
+// A varied look drawn from the seed: sun elevation 12-70 degrees, sunny to
+// overcast light, warm / cold light colour, sky colour and clouds, asphalt or
+// concrete road, material tints, six facade styles with free colours, car shapes.
+Appearance RandomAppearance(uint64_t seed);
+
 struct Scene {
   std::vector<Surface> surfaces;
   std::vector<Triangle> triangles;
@@ -74,6 +109,7 @@ struct Scene {
   Eigen::Vector3d horizontal_a = Eigen::Vector3d::UnitX();  // horizontal basis (ground textures)
   Eigen::Vector3d horizontal_b = Eigen::Vector3d::UnitZ();
   Eigen::Vector3d to_sun = Eigen::Vector3d(0.3, -0.8, 0.5).normalized();  // unit, towards the sun
+  Appearance appearance;  // light and sky used by the shader
   int num_buildings = 0, num_cars = 0, num_poles = 0, num_trees = 0;
   // Occluders collected while placing objects, then indexed in `shadows`.
   std::vector<ShadowBox> shadow_boxes;
@@ -87,6 +123,7 @@ struct SceneOptions {
   double tree_density = 0.5;      // relative number of trees, hedges and bushes (0..)
   double curb_height = 0.12;      // sidewalk height above the road (m)
   bool shadows = true;            // sun shadows cast by buildings, cars, hedges and trees
+  Appearance appearance;          // light, colours, textures and car shapes
 };
 
 // Builds the whole street along the path. Assigns each sample's StreetProfile

@@ -96,21 +96,24 @@ Eigen::Vector3f Shader::Surface(const Triangle& triangle, const Eigen::Vector3d&
     const Eigen::Vector3d m = d - d.dot(scene_.down) * scene_.down;
     if (m.squaredNorm() > 1e-12) n = m.normalized();
   }
+  const Appearance& look = scene_.appearance;
   const double upness = -n.dot(scene_.down);  // 1 for ground, 0 for walls
-  const float sky_light = static_cast<float>(0.55 + 0.2 * upness);
-  float sun_light = static_cast<float>(0.75 * std::max(0.0, n.dot(scene_.to_sun)));
+  const float sky_light = static_cast<float>(look.sky_light + look.sky_light_up * upness);
+  float sun_light = static_cast<float>(look.sun_strength * std::max(0.0, n.dot(scene_.to_sun)));
   if (sun_light > 0 && !scene_.shadows.empty()) {
     const int skip = s.caster_box >= 0 ? ShadowCasters::BoxId(s.caster_box)
                                        : (s.caster_ellipsoid >= 0 ? scene_.shadows.EllipsoidId(s.caster_ellipsoid) : -1);
     sun_light *= 1.f - scene_.shadows.Occlusion(point + 0.02 * triangle.normal, skip);
   }
-  return s.tint * (albedo * (sky_light + sun_light));
+  if (!look.varied) return s.tint * (albedo * (sky_light + sun_light));
+  return s.tint.cwiseProduct(look.light_colour) * (albedo * (sky_light + sun_light));
 }
 
 Eigen::Vector3f Shader::Sky(const Eigen::Vector3d& direction, double pixel_angle) const {
   const double elevation = -direction.dot(scene_.down);  // sine of the elevation angle
   const float t = static_cast<float>(std::pow(std::clamp(elevation * 1.6, 0.0, 1.0), 0.7));
-  const Eigen::Vector3f horizon(0.93f, 0.94f, 0.96f), zenith(0.55f, 0.68f, 0.90f);
+  const Eigen::Vector3f& horizon = scene_.appearance.sky_horizon;
+  const Eigen::Vector3f& zenith = scene_.appearance.sky_zenith;
   Eigen::Vector3f sky = horizon + t * (zenith - horizon);
   if (elevation > 0.01) {
     // Clouds on a plane far above: direction -> plane coordinates.
@@ -120,7 +123,7 @@ Eigen::Vector3f Shader::Sky(const Eigen::Vector3d& direction, double pixel_angle
     const MipTexture& clouds = textures_[kTexClouds];
     const float footprint = static_cast<float>(clouds.size() * k * pixel_angle / (e * e));
     const float c = clouds.Sample(cu, cv, footprint);
-    const float amount = std::clamp((c - 0.3f) * 1.4f, 0.f, 1.f) * static_cast<float>(std::min(1.0, elevation * 5));
+    const float amount = std::clamp((c - scene_.appearance.cloud_threshold) * 1.4f, 0.f, 1.f) * static_cast<float>(std::min(1.0, elevation * 5));
     sky += amount * (Eigen::Vector3f(0.97f, 0.97f, 0.98f) - sky);
   }
   return sky;

@@ -206,6 +206,19 @@ Image Facade(int n, int style, std::mt19937_64& rng, uint32_t s) {
         p = joint ? 0.35f : 0.58f + 0.08f * (HashUnit(int(x * 4), int(y * 4), s + 6) - 0.5f) + 1.3f * noise;
         break;
       }
+      case 4: {  // horizontal boards 16 cm high (siding), a shadow line under each
+        const float fy = std::fmod(y * 6.4f, 0.16f) / 0.16f;
+        const int board = static_cast<int>(y * 6.4f / 0.16f);
+        p = 0.60f + 0.10f * (HashUnit(board, 0, s + 8) - 0.5f) + 0.8f * noise - (fy < 0.12f ? 0.18f : 0.f);
+        break;
+      }
+      case 5: {  // glass curtain wall: dark panes 1.6 x 1.6 m between bright mullions
+        const float fx = std::fmod(x * 6.4f, 1.6f), fy = std::fmod(y * 6.4f, 1.6f);
+        const bool mullion = fx < 0.08f || fy < 0.08f;
+        p = mullion ? 0.72f + noise * 0.5f
+                    : 0.16f + 0.12f * fy + 0.10f * (HashUnit(int(x * 4), int(y * 4), s + 9) - 0.5f) + 0.5f * noise;
+        break;
+      }
       default: {  // stone blocks 0.8 x 0.4 m
         const int row = static_cast<int>(y * 16);
         const float bx = x * 8 + (row % 2) * 0.5f;
@@ -216,6 +229,7 @@ Image Facade(int n, int style, std::mt19937_64& rng, uint32_t s) {
     }
   });
   std::uniform_real_distribution<float> u(0.f, 1.f);
+  if (style == 5) return c.Done();  // the curtain wall is all window
   const float win_w = (1.0f + 0.5f * u(rng)) * m, win_h = (1.3f + 0.5f * u(rng)) * m;
   const float sill = 0.9f * m, frame = 0.07f * m;
   const bool mullion = u(rng) < 0.6f;
@@ -272,6 +286,35 @@ Image Sign(int n) {
     if (std::min(std::min(x, 1 - x), std::min(y, 1 - y)) < 0.03f) p = 0.3f;
   });
   c.Blur3();
+  return c.Done();
+}
+
+// Concrete road (tile 2.5 m): slabs 2.5 m long with a dark joint across, fine
+// grain, a few patches.
+Image RoadConcrete(int n, std::mt19937_64& rng, uint32_t s) {
+  Canvas c(n);
+  c.ForEach([&](float x, float y, float& p) {
+    p = 0.52f + 0.10f * Fbm(x, y, 4, 5, 0.6f, s) + 0.16f * (HashUnit(int(x * n), int(y * n), s + 1) - 0.5f);
+    if (std::min(y, 1 - y) * n < 1.5f) p *= 0.5f;
+  });
+  c.Blur3();
+  std::uniform_real_distribution<float> u(0.f, 1.f);
+  for (int i = 0; i < 40; ++i) c.Disc(u(rng) * n, u(rng) * n, 4 + 14 * u(rng), 4 + 14 * u(rng), 0.35f, 0.3f);
+  return c.Done();
+}
+
+// Dry grass: bright patchy base with bare spots.
+Image GrassDry(int n, std::mt19937_64& rng, uint32_t s) {
+  Canvas c(n);
+  c.ForEach([&](float x, float y, float& p) {
+    const float patch = Fbm(x, y, 4, 5, 0.6f, s);
+    p = 0.45f + 0.25f * patch + 0.14f * (HashUnit(int(x * n), int(y * n), s + 1) - 0.5f);
+  });
+  std::uniform_real_distribution<float> u(0.f, 1.f);
+  for (int i = 0; i < n * n / 80; ++i) {
+    const float x = u(rng) * n, y = u(rng) * n, a = u(rng) * 3.1416f, len = 2 + 3 * u(rng);
+    for (float t = 0; t < len; t += 0.7f) c.Disc(x + t * std::cos(a), y + t * std::sin(a), 0.7f, 0.7f, 0.2f, 0.4f);
+  }
   return c.Done();
 }
 
@@ -354,6 +397,10 @@ TextureBank::TextureBank(uint64_t seed, int size) {
     p = std::clamp(1.8f * (Fbm(x, y, 3, 6, 0.55f, s + 1500) + 0.05f), 0.f, 1.f) * 0.9f + 0.05f;
   });
   set(kTexClouds, clouds.Done());
+  for (int style = kNumFacadeStyles; style < kNumFacadeStyles + kNumExtraFacadeStyles; ++style)
+    set(FacadeTexture(style), Facade(size, style, rng, s + 600 + 50 * style));
+  set(kTexRoadConcrete, RoadConcrete(size, rng, s + 1600));
+  set(kTexGrassDry, GrassDry(size, rng, s + 1700));
 }
 
 }  // namespace dvso::sim

@@ -31,9 +31,20 @@ enum TextureId : int {
   kTexSign,
   kTexMacro,   // low-frequency stains, multiplied on top of detail textures
   kTexClouds,  // sky
+  // Extra materials of the varied appearance (SceneOptions::appearance); generated
+  // after the others, so the textures above do not change with them.
+  kTexFacadeSiding,   // horizontal boards (cladding) with windows
+  kTexFacadeGlass,    // glass curtain wall: large panes between mullions
+  kTexRoadConcrete,   // concrete road slabs with joints
+  kTexGrassDry,       // sparse, patchy grass
   kNumTextures
 };
 constexpr int kNumFacadeStyles = 4;  // kTexFacadePlaster .. kTexFacadeStone
+constexpr int kNumExtraFacadeStyles = 2;  // kTexFacadeSiding, kTexFacadeGlass
+// Texture of facade style i in [0, kNumFacadeStyles + kNumExtraFacadeStyles).
+inline int FacadeTexture(int style) {
+  return style < kNumFacadeStyles ? kTexFacadePlaster + style : kTexFacadeSiding + (style - kNumFacadeStyles);
+}
 
 // A square, power-of-two, tileable single-channel texture (albedo in [0, 1])
 // with its full mip chain (2x2 box filter per level).

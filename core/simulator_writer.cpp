@@ -16,6 +16,7 @@
 #include <fstream>
 #include <future>
 #include <iomanip>
+#include <sstream>
 #include <opencv2/imgcodecs.hpp>
 
 #include "core/disparity_io.h"
@@ -67,6 +68,21 @@ void WriteSimulationYaml(const std::string& path, const StreetSimulator& simulat
         << "\n";
     out << "building_density: " << o.scene.building_density << "\ncar_density: " << o.scene.car_density
         << "\ntree_density: " << o.scene.tree_density << "\nshadows: " << (o.scene.shadows ? "true" : "false") << "\n";
+    const sim::Appearance& a = scene.appearance;
+    auto vec = [](const Eigen::Vector3f& v) {
+      std::ostringstream s;
+      s << "[" << v.x() << ", " << v.y() << ", " << v.z() << "]";
+      return s.str();
+    };
+    out << "appearance: {varied: " << (a.varied ? "true" : "false") << ", sun_strength: " << a.sun_strength
+        << ", sky_light: " << a.sky_light << ", sky_light_up: " << a.sky_light_up << ", light_colour: "
+        << vec(a.light_colour) << ", sky_zenith: " << vec(a.sky_zenith) << ", cloud_threshold: " << a.cloud_threshold
+        << ", road_texture: " << (a.road_texture == sim::kTexRoadConcrete ? "concrete" : "asphalt")
+        << ", road_tint: " << vec(a.road_tint) << ", grass_tint: " << vec(a.grass_tint)
+        << ", leaves_tint: " << vec(a.leaves_tint) << ", facade_styles: " << a.facade_styles
+        << ", facade_free_colour: " << a.facade_free_colour << ", car_shapes: " << (a.car_shapes ? "true" : "false")
+        << "}\n";
+    out << "exposure_level: " << o.exposure_level << "\nheight_jitter: " << o.height_jitter << "\n";
     out << "world: {triangles: " << scene.triangles.size() << ", buildings: " << scene.num_buildings
         << ", cars: " << scene.num_cars << ", poles: " << scene.num_poles << ", trees: " << scene.num_trees << "}\n";
     out << "path_length_m: " << summary.path_length << "\nrender_seconds: " << summary.seconds << "\n";

@@ -17,6 +17,7 @@ struct SimulateArgs {
   double fx = 0, fy = 0, cx = -1, cy = -1, baseline = 0;  // 0 / -1 = KITTI (scaled with the size)
   bool no_exposure = false, no_vignetting = false, no_noise = false, no_shadows = false, no_edge_aa = false,
        quiet = false;
+  std::string appearance = "fixed";  // fixed | varied
   SimulatorOptions options;
 };
 
@@ -38,6 +39,7 @@ void Run(SimulateArgs& args) {
   o.noise = !args.no_noise;
   o.scene.shadows = !args.no_shadows;
   o.edge_antialiasing = !args.no_edge_aa;
+  o.vary_appearance = args.appearance == "varied";
   o.Check();
   const auto& c = o.camera.left;
   std::cout << "output      : " << args.output_dir << "\n"
@@ -49,8 +51,8 @@ void Run(SimulateArgs& args) {
             << (o.vignetting ? "on" : "off") << ", noise " << (o.noise ? "sigma " + std::to_string(o.noise_sigma) : "off")
             << "\n"
             << "world       : seed " << o.seed << ", buildings " << o.scene.building_density << ", cars "
-            << o.scene.car_density << ", trees " << o.scene.tree_density << ", shadows " << (o.scene.shadows ? "on" : "off") << ", colour " << (o.color ? "on" : "off")
-            << ", threads " << o.num_threads << "\n";
+            << o.scene.car_density << ", trees " << o.scene.tree_density << ", shadows " << (o.scene.shadows ? "on" : "off")  << ", colour " << (o.color ? "on" : "off")
+            << ", appearance " << args.appearance << ", threads " << o.num_threads << "\n";
   const SimulationSummary summary = WriteSimulatedSequence(o, args.output_dir, !args.quiet);
   std::cout << "wrote " << summary.frames << " frames (" << summary.path_length << " m) in " << summary.seconds
             << " s: " << summary.frames / std::max(summary.seconds, 1e-9) << " frames/s\n";
@@ -98,6 +100,14 @@ void AddSimulateCommand(CLI::App& app) {
   cmd->add_option("--max-distance", o.max_distance, "drawing distance (m)")->capture_default_str();
   cmd->add_option("--threads", o.num_threads, "render threads")->capture_default_str();
   cmd->add_option("--texture-size", o.texture_size, "procedural texture resolution (power of two)")
+      ->capture_default_str();
+  cmd->add_option("--exposure-level", o.exposure_level, "overall camera gain")->capture_default_str();
+  cmd->add_option("--height-jitter", o.height_jitter, "camera height bounce bound (m; GT poses include it)")
+      ->capture_default_str();
+  cmd->add_option("--appearance", args->appearance,
+                  "fixed: the original look; varied: light, sky, colours, textures, car shapes, exposure and "
+                  "camera height drawn from the seed")
+      ->check(CLI::IsMember({"fixed", "varied"}))
       ->capture_default_str();
   cmd->add_flag("--quiet", args->quiet, "no progress bar");
   cmd->callback([args] { Run(*args); });

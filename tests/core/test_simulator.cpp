@@ -257,6 +257,8 @@ TEST(Simulator, RejectsBadOptions) {
   expect_error([](SimulatorOptions& o) { o.camera.baseline = 0; });
   expect_error([](SimulatorOptions& o) { o.camera.left.width = 8; });
   expect_error([](SimulatorOptions& o) { o.scene.building_density = 1.5; });
+  expect_error([](SimulatorOptions& o) { o.exposure_level = 0; });
+  expect_error([](SimulatorOptions& o) { o.height_jitter = -0.01; });
   expect_error([](SimulatorOptions& o) {
     o.trajectory_path.clear();
     o.num_frames = -1;
@@ -324,6 +326,117 @@ TEST(Simulator, WritesKittiLayoutWithGroundTruth) {
   fs::remove_all(dir);
 }
 
+// Mean colour (B, G, R) of the structure pixels and the mean sky brightness of frame 0.
+struct LookStats {
+  cv::Scalar structure;
+  double sky = 0;
+};
+LookStats Look(const SimulatorOptions& o) {
+  const SimulatedFrame f = StreetSimulator(o).Render(0);
+  cv::Mat structure_mask = f.left.depth > 0, sky_mask = f.left.depth <= 0;
+  LookStats s;
+  s.structure = cv::mean(f.left.color, structure_mask);
+  s.sky = cv::countNonZero(sky_mask) > 0 ? cv::mean(f.left.grey, sky_mask)[0] : 0;
+  return s;
+}
+
+TEST(Simulator, VariedAppearanceChangesTheLookPerSeed) {
+  // The varied look is drawn from the seed and deterministic; the fixed look is the default.
+  const sim::Appearance a1 = sim::RandomAppearance(1), a1b = sim::RandomAppearance(1), a2 = sim::RandomAppearance(2);
+  EXPECT_TRUE(a1.varied);
+  EXPECT_EQ(a1.sun_strength, a1b.sun_strength);
+  EXPECT_NE(a1.sun_strength, a2.sun_strength);
+  EXPECT_FALSE(sim::Appearance{}.varied);
+  // Over 5 seeds, the spread of the mean brightness and of the colour balance of
+  // the structure pixels is much larger with the varied look than with the fixed one.
+  auto spread = [](bool varied) {
+    double lo = 1e9, hi = -1e9, balance_lo = 1e9, balance_hi = -1e9;
+    for (uint64_t seed = 1; seed <= 5; ++seed) {
+      SimulatorOptions o = SmallOptions(160, 48);
+      o.num_frames = 1;
+      o.color = true;
+      o.noise = false;
+      o.seed = seed;
+      o.vary_appearance = varied;
+      const LookStats s = Look(o);
+      const double mean = (s.structure[0] + s.structure[1] + s.structure[2]) / 3;
+      const double balance = (s.structure[2] - s.structure[0]) / std::max(mean, 1.0);  // red - blue
+      lo = std::min(lo, mean);
+      hi = std::max(hi, mean);
+      balance_lo = std::min(balance_lo, balance);
+      balance_hi = std::max(balance_hi, balance);
+    }
+    return std::make_pair(hi - lo, balance_hi - balance_lo);
+  };
+  const auto fixed = spread(false), varied = spread(true);
+  std::printf("brightness spread over seeds: fixed %.1f varied %.1f; colour balance spread: fixed %.3f varied %.3f\n",
+              fixed.first, varied.first, fixed.second, varied.second);
+  EXPECT_GT(varied.first, 20.0);
+  EXPECT_GT(varied.first, 2.0 * fixed.first);
+  EXPECT_GT(varied.second, 1.5 * fixed.second);
+}
+
+TEST(Simulator, VariedAppearanceKeepsTheGroundTruthExact) {
+  SimulatorOptions o = SmallOptions();
+  o.seed = 5;
+  o.vary_appearance = true;
+  o.num_frames = 2;
+  const StreetSimulator simulator(o);
+  EXPECT_TRUE(simulator.scene().appearance.varied);
+  EXPECT_NEAR(simulator.options().camera_height, 1.65, 0.1 + 1e-12);
+  EXPECT_GT(simulator.options().height_jitter, 0.0);
+  const SimulatedFrame a = simulator.Render(0), b = simulator.Render(1);
+  // Stereo: the right image warped by the GT disparity reproduces the left one; d * z = fx * b.
+  const ErrorStats stereo = StereoWarpError(a, 0.0), wrong = StereoWarpError(a, 2.0);
+  EXPECT_GT(stereo.count, a.left.grey.total() / 2);
+  EXPECT_LT(stereo.median, 2.5);
+  EXPECT_GT(wrong.mean, 2.0 * stereo.mean);
+  const double fxb = simulator.camera().FxB();
+  for (int y = 0; y < a.left.depth.rows; y += 3)
+    for (int x = 0; x < a.left.depth.cols; x += 3) {
+      const float z = a.left.depth.at<float>(y, x);
+      if (z > 0) ASSERT_NEAR(z * a.disparity_left.at<float>(y, x), fxb, 1e-4 * fxb);
+    }
+  // Temporal: the GT poses (height bounce included) reproject frame 0 into frame 1.
+  const PinholeCamera& cam = simulator.camera().left;
+  const Eigen::Isometry3d T_b_a = b.T_first_camera.inverse() * a.T_first_camera;
+  std::vector<float> errors, shifted;
+  for (int y = 2; y < cam.height - 2; ++y)
+    for (int x = 2; x < cam.width - 2; ++x) {
+      const float z = a.left.depth.at<float>(y, x);
+      if (z <= 0) continue;
+      const Eigen::Vector3d p = T_b_a * (z * cam.Unproject(x, y));
+      if (p.z() < 0.5) continue;
+      const Eigen::Vector2d q = cam.Project(p);
+      if (!cam.InImage(q.x(), q.y(), 2)) continue;
+      if (std::abs(BilinearF(b.left.depth, q.x(), q.y()) - p.z()) > 0.02 * p.z()) continue;
+      errors.push_back(std::abs(a.left.grey.at<uint8_t>(y, x) - Bilinear(b.left.grey, q.x(), q.y())));
+      shifted.push_back(std::abs(a.left.grey.at<uint8_t>(y, x) - Bilinear(b.left.grey, q.x(), q.y() + 2)));
+    }
+  const ErrorStats temporal = Summarise(errors), off = Summarise(shifted);
+  EXPECT_GT(temporal.count, static_cast<int>(cam.width * cam.height / 3));
+  EXPECT_LT(temporal.median, 2.5);
+  EXPECT_GT(off.mean, 1.5 * temporal.mean) << "a 2 px vertical error (a missing height bounce) must show";
+}
+
+TEST(Simulator, HeightJitterMovesTheCameraAlongDownWithinItsBound) {
+  SimulatorOptions o = SmallOptions(64, 32);
+  o.num_frames = 30;
+  const StreetSimulator plain(o);
+  o.height_jitter = 0.04;
+  const StreetSimulator bouncing(o);
+  const Eigen::Vector3d down = bouncing.scene().down;
+  double max_offset = 0;
+  for (int i = 0; i < 30; ++i) {
+    const Eigen::Vector3d d =
+        bouncing.Render(i).T_world_camera.translation() - plain.Render(i).T_world_camera.translation();
+    EXPECT_NEAR((d - d.dot(down) * down).norm(), 0.0, 1e-9) << "only the height changes";
+    EXPECT_LE(std::abs(d.dot(down)), 0.04 + 1e-12);
+    max_offset = std::max(max_offset, std::abs(d.dot(down)));
+  }
+  EXPECT_GT(max_offset, 0.01);
+}
+
 TEST(Simulator, CommandLine) {
   const fs::path dir = fs::temp_directory_path() / ("dvso_sim_cli_" + std::to_string(::getpid()));
   fs::remove_all(dir);
@@ -333,6 +446,13 @@ TEST(Simulator, CommandLine) {
   EXPECT_EQ(std::system(ok.c_str()), 0);
   EXPECT_TRUE(fs::exists(dir / "image_1" / "000001.png"));
   EXPECT_TRUE(fs::exists(dir / "poses.txt"));
+  const std::string varied = dvso + " simulate --width 128 --height 40 --count 1 --seed 4 --texture-size 128 --quiet "
+                                    "--appearance varied --out " + dir.string() + "_varied > /dev/null 2>&1";
+  EXPECT_EQ(std::system(varied.c_str()), 0);
+  EXPECT_TRUE(fs::exists(dir.string() + "_varied/image_0/000000.png"));
+  fs::remove_all(dir.string() + "_varied");
+  const std::string wrong_look = dvso + " simulate --count 1 --appearance pretty --out " + dir.string() + " > /dev/null 2>&1";
+  EXPECT_NE(std::system(wrong_look.c_str()), 0);
   const std::string bad = dvso + " simulate --count 2 --stride 0 --out " + dir.string() + " > /dev/null 2>&1";
   EXPECT_NE(std::system(bad.c_str()), 0);
   fs::remove_all(dir);
