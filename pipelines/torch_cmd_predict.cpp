@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <iostream>
+#include <set>
 #include <opencv2/imgcodecs.hpp>
 
 #include "core/disparity_io.h"
@@ -43,6 +44,10 @@ void RunPredict(const PredictArgs& args) {
     }
     std::sort(files.begin(), files.end());
     RequireFile(!files.empty(), args.images, "no .png/.jpg images");
+    std::set<std::string> stems;
+    for (const std::string& f : files)
+      RequireFile(stems.insert(fs::path(f).stem().string()).second, f,
+                  "two images share this name (outputs keep the input names)");
   }
   const int count = sequence ? sequence->size() : static_cast<int>(files.size());
   ProgressBar progress("predict", count);
@@ -59,7 +64,8 @@ void RunPredict(const PredictArgs& args) {
       RequireFile(!image.empty(), files[i], "cannot read image");
     }
     const DisparityPair pair = predictor.PredictImage(image);
-    const std::string name = FrameFileName(i, ".png");
+    // --images keeps each input's name (as .png); --sequence numbers the frames.
+    const std::string name = sequence ? FrameFileName(i, ".png") : fs::path(files[i]).stem().string() + ".png";
     WriteKittiMapPng(JoinPath(JoinPath(args.out, "left"), name), pair.left);
     WriteKittiMapPng(JoinPath(JoinPath(args.out, "right"), name), pair.right);
     if (!args.no_color) {
@@ -78,7 +84,7 @@ void AddPredictCommand(CLI::App& app) {
   auto args = std::make_shared<PredictArgs>();
   auto* cmd = app.add_subcommand("predict", "Predict left/right disparity maps with an exported model");
   cmd->add_option("--model", args->model, "TorchScript model from `dvso export`")->required()->check(CLI::ExistingFile);
-  cmd->add_option("--images", args->images, "Folder of images (sorted by name; frame i = i-th image)");
+  cmd->add_option("--images", args->images, "Folder of .png/.jpg images; each output keeps its input's name (as .png)");
   cmd->add_option("--sequence", args->sequence, "Sequence folder (KITTI odometry layout / dvso simulate output)");
   cmd->add_option("--out", args->out, "Output folder")->required();
   cmd->add_flag("--post-process", args->options.post_process, "Godard's flip-and-blend post-processing (left)");

@@ -1,0 +1,68 @@
+// `dvso predict --images DIR` keeps the input file names (as .png), through
+// the real binary with an untrained tiny model.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <string>
+
+#include "core/disparity_io.h"
+
+namespace dvso {
+namespace {
+namespace fs = std::filesystem;
+
+class PredictCli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("dvso_predict_cli_" + std::to_string(::getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_ / "images");
+    model_ = (dir_ / "tiny.pt").string();
+    const std::string export_cmd = std::string(DVSO_BINARY) + " export --config " + DVSO_TEST_DATA_DIR +
+                                   "/../configs/stacknet_tiny.yaml --random-init --model simple --out " + model_ +
+                                   " > /dev/null 2>&1";
+    ASSERT_EQ(std::system(export_cmd.c_str()), 0);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  int Predict(const std::string& extra = "") {
+    const std::string cmd = std::string(DVSO_BINARY) + " predict --model " + model_ + " --images " +
+                            (dir_ / "images").string() + " --out " + (dir_ / "out").string() + " " + extra +
+                            " > /dev/null 2>&1";
+    return std::system(cmd.c_str());
+  }
+  void WriteImage(const std::string& name, int width, int height) {
+    cv::Mat image(height, width, CV_8UC3);
+    cv::randu(image, 0, 255);
+    ASSERT_TRUE(cv::imwrite((dir_ / "images" / name).string(), image));
+  }
+  fs::path dir_;
+  std::string model_;
+};
+
+TEST_F(PredictCli, ImagesKeepTheirNames) {
+  WriteImage("zeta_frame.png", 96, 40);
+  WriteImage("0042.jpg", 80, 32);
+  ASSERT_EQ(Predict(), 0);
+  for (const char* sub : {"left", "right", "left_color", "right_color"}) {
+    EXPECT_TRUE(fs::exists(dir_ / "out" / sub / "zeta_frame.png")) << sub;
+    EXPECT_TRUE(fs::exists(dir_ / "out" / sub / "0042.png")) << sub;
+    EXPECT_FALSE(fs::exists(dir_ / "out" / sub / "000000.png")) << sub << ": renumbered";
+  }
+  // Maps at the input image's resolution.
+  const cv::Mat left = ReadKittiMapPng((dir_ / "out" / "left" / "0042.png").string());
+  EXPECT_EQ(left.cols, 80);
+  EXPECT_EQ(left.rows, 32);
+}
+
+TEST_F(PredictCli, TwoImagesWithTheSameNameAreAnError) {
+  WriteImage("a.png", 64, 32);
+  WriteImage("a.jpg", 64, 32);
+  EXPECT_NE(Predict("--no-color"), 0);
+}
+
+}  // namespace
+}  // namespace dvso
