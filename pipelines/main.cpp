@@ -16,6 +16,8 @@ int main(int argc, char** argv) {
   dvso::cli::AddEvalDepthCommand(app);
   dvso::cli::AddOdometryCommand(app);
   dvso::cli::AddLabelsCommand(app);
+  dvso::cli::AddAblationCommand(app);
+  dvso::cli::AddTuneBaselineCommand(app);
 #ifdef DVSO_WITH_TORCH
   dvso::cli::AddTrainCommand(app);
   dvso::cli::AddExportCommand(app);

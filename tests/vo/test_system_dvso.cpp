@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <nlohmann/json.hpp>
 
 #include "core/disparity_conversion.h"
 #include "core/error.h"
@@ -185,6 +186,19 @@ TEST(DvsoMode, ExactPredictionsGiveAMetricTrajectoryWithoutAlignment) {
   EXPECT_LT(source.calls, kFrames);  // only keyframes ask for predictions
 }
 
+TEST(DvsoMode, DepthInitialisationAloneTracksEveryFrame) {
+  // Ablation row "in": no virtual stereo term. The first keyframe's points
+  // then have no residual until the second keyframe and must survive.
+  const testing::SimulatedSequence& seq = Sequence();
+  OracleSource source;
+  OdometryOptions options;
+  options.window.use_virtual_stereo = false;
+  options.dvso.left_right_check = false;
+  const DvsoRun r = RunDvso(&source, options);
+  EXPECT_EQ(r.lost, 0);
+  EXPECT_NEAR(r.estimate.PathLength() / seq.path_length, 1.0, 0.05);
+}
+
 TEST(DvsoMode, TrajectoryScaleFollowsThePredictionScale) {
   const testing::SimulatedSequence& seq = Sequence();
   OracleSource source;
@@ -277,6 +291,37 @@ TEST(DvsoCli, RunsOnDisparityFilesAndRejectsBadInputWithOneLineNothingWritten) {
   // Prediction options outside dvso mode are a usage error.
   EXPECT_NE(dvso::testing::RunDvso("odometry --mode mono --sequence " + seq + " --out " + dir + "/m" + files).exit_code,
             0);
+}
+
+
+TEST(DvsoCli, AblationAndTuneBaselinePrintEveryRow) {
+  const std::string dir = ::testing::TempDir() + "/dvso_ablation_cli";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  const std::string seq = dir + "/seq";
+  ASSERT_EQ(dvso::testing::RunDvso("simulate --quiet --out " + seq +
+                                   " --count 15 --width 320 --height 96 --texture-size 128").exit_code, 0);
+  const std::string common = " --sequence " + seq + " --gt " + seq + "/poses.txt --disparity-left " + seq +
+                             "/disp_0 --disparity-right " + seq + "/disp_1 --preset fast";
+  const auto ablation = dvso::testing::RunDvso("ablation --json --tuned-baseline 0.55 --out " + dir + "/abl" + common,
+                                               /*merge_stderr=*/false);
+  ASSERT_EQ(ablation.exit_code, 0) << ablation.out;
+  const nlohmann::json j = nlohmann::json::parse(ablation.out);
+  ASSERT_EQ(j["variants"].size(), 6u);
+  const char* names[] = {"mono", "in", "in+vs", "in+vs+lr", "in+vs+tb", "full"};
+  for (int i = 0; i < 6; ++i) EXPECT_EQ(j["variants"][i]["name"], names[i]);
+  EXPECT_TRUE(j["variants"][0]["aligned"].get<bool>());   // mono is the Sim(3)-aligned reference
+  EXPECT_FALSE(j["variants"][5]["aligned"].get<bool>());
+  // Exact disparities: the metric rows need no scale correction; the tb rows use b_v = 0.55 instead of 0.537.
+  EXPECT_NEAR(j["variants"][2]["sim3_scale"].get<double>(), 1.0, 0.03);
+  EXPECT_NEAR(j["variants"][5]["sim3_scale"].get<double>(), 0.537 / 0.55, 0.03);
+  const auto tune = dvso::testing::RunDvso("tune-baseline --json --values 0.45:0.09:0.63 --out " + dir + "/tune" +
+                                           common, /*merge_stderr=*/false);
+  ASSERT_EQ(tune.exit_code, 0) << tune.out;
+  const nlohmann::json t = nlohmann::json::parse(tune.out);
+  ASSERT_EQ(t["runs"].size(), 3u);
+  EXPECT_NEAR(t["best_virtual_baseline"].get<double>(), 0.54, 1e-9);  // the true baseline is 0.537
+  EXPECT_NE(dvso::testing::RunDvso("tune-baseline --values 0.6:0.1:0.3 --out " + dir + "/bad" + common).exit_code, 0);
 }
 
 }  // namespace

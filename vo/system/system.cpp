@@ -222,8 +222,15 @@ void System::InitializeMetric(int frame_index, const ImagePyramidPtr& left, cons
   // The first keyframe's candidates are activated at once with metric depth:
   // from the static stereo match (Stereo DSO) or the prediction (DVSO "in").
   ActivateCandidates(frame_index, /*include_new_keyframe=*/true);
-  FrameEvent unused;
-  RunOptimization(&unused);
+  // A lone keyframe's points only have residuals through a stereo term
+  // (static or virtual); without one there is nothing to optimise, and the
+  // outlier pass would drop every point for having no residual.
+  bool any_residual = false;
+  for (const Point& p : window_->keyframe(0).points) any_residual = any_residual || !p.residuals.empty();
+  if (any_residual) {
+    FrameEvent unused;
+    RunOptimization(&unused);
+  }
   ++num_keyframes_total_;
   SetTrackingReference(frame_index);
   initialized_ = true;

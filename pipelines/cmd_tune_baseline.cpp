@@ -1,0 +1,46 @@
+// `dvso tune-baseline`: the paper's grid search of the virtual stereo baseline
+// ("tb") on a sequence with ground truth: full DVSO per value, the value with
+// the lowest unaligned t_rel wins.
+#include <iostream>
+
+#include "core/error.h"
+#include "pipelines/commands.h"
+#include "pipelines/dvso_experiments.h"
+
+namespace dvso::cli {
+
+void AddTuneBaselineCommand(CLI::App& app) {
+  struct Args {
+    ExperimentArgs experiment;
+    std::string values;
+  };
+  auto args = std::make_shared<Args>();
+  auto* cmd = app.add_subcommand("tune-baseline", "Grid search of the DVSO virtual baseline b_v on a sequence with GT");
+  AddExperimentOptions(cmd, &args->experiment);
+  cmd->add_option("--values", args->values, "start:step:end in metres (default: +-20 % around the model's b_v)");
+  cmd->callback([args] {
+    const ExperimentSetup setup = OpenExperiment(args->experiment);
+    const double default_bv = setup.options.dvso.virtual_baseline;
+    std::vector<double> grid;
+    if (!args->values.empty()) {
+      grid = ParseRange(args->values);
+    } else {
+      for (int k = -4; k <= 4; ++k) grid.push_back(default_bv * (1.0 + 0.05 * k));
+    }
+    double best = 0;
+    const std::vector<VariantResult> results =
+        TuneVirtualBaseline(setup, grid, args->experiment.count, args->experiment.out, &best, !args->experiment.json);
+    if (args->experiment.json) {
+      nlohmann::json j;
+      j["default_virtual_baseline"] = default_bv;
+      j["best_virtual_baseline"] = best;
+      for (const VariantResult& r : results) j["runs"].push_back(r.ToJson());
+      std::cout << j.dump(2) << std::endl;
+    } else {
+      std::cout << FormatVariantTable(results) << "best virtual baseline: " << best << " m (default " << default_bv
+                << " m); use it with --virtual-baseline " << best << "\n";
+    }
+  });
+}
+
+}  // namespace dvso::cli

@@ -1,0 +1,141 @@
+#include "pipelines/dvso_experiments.h"
+
+#include <cmath>
+#include <limits>
+#include <iomanip>
+#include <sstream>
+
+#include "core/error.h"
+#include "core/eval_odometry.h"
+#include "core/fs_util.h"
+#include "core/progress.h"
+#include "vo/system/sequence_runner.h"
+
+namespace dvso::cli {
+
+nlohmann::json VariantResult::ToJson() const {
+  return {{"name", name},           {"t_rel", t_rel},   {"r_rel", r_rel},      {"sim3_scale", sim3_scale},
+          {"ate_rmse", ate_rmse},   {"ms_per_frame", ms_per_frame},           {"lost", lost},
+          {"resets", resets},       {"aligned", aligned},   {"segments", segments}};
+}
+
+VariantResult RunVariant(const std::string& name, const SequenceReader& sequence, const Trajectory& gt,
+                         vo::OdometryMode mode, const vo::OdometryOptions& options, DisparitySource* predictions,
+                         int count, const std::string& out_dir) {
+  vo::SequenceRunOptions run;
+  run.count = count;
+  run.progress = false;
+  run.predictions = predictions;
+  const vo::SequenceRunSummary summary = vo::RunOdometryOnSequence(sequence, options, mode, out_dir, run);
+  const Trajectory estimate = ReadTrajectory(JoinPath(out_dir, "trajectory.txt"), TrajectoryFormat::kKitti);
+  Trajectory truth;
+  truth.poses.assign(gt.poses.begin(), gt.poses.begin() + std::min(gt.size(), estimate.size()));
+  VariantResult r;
+  r.name = name;
+  r.aligned = CapabilitiesOf(mode).needs_mono_initializer;
+  OdometryEvalOptions eval;
+  eval.align = AlignmentMode::kSim3;
+  const OdometryMetrics sim3 = EvaluateOdometry(truth, estimate, eval);
+  r.sim3_scale = sim3.alignment.scale;
+  eval.align = r.aligned ? AlignmentMode::kSim3 : AlignmentMode::kNone;
+  const OdometryMetrics m = r.aligned ? sim3 : EvaluateOdometry(truth, estimate, eval);
+  r.segments = m.segments;
+  r.t_rel = m.segments > 0 ? m.t_rel : 0.0;
+  r.r_rel = m.segments > 0 ? m.r_rel : 0.0;
+  r.ate_rmse = m.ate_rmse;
+  r.ms_per_frame = summary.mean_ms;
+  r.lost = summary.lost;
+  r.resets = summary.resets;
+  return r;
+}
+
+void AddExperimentOptions(CLI::App* cmd, ExperimentArgs* args) {
+  cmd->add_option("--sequence", args->sequence, "Sequence (KITTI layout, EuRoC, or image folder + --camera)")
+      ->required();
+  cmd->add_option("--gt", args->gt, "Ground-truth poses, one KITTI line per sequence frame")
+      ->required()
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--out", args->out, "Folder for the runs' outputs (one subfolder per run)")->required();
+  cmd->add_option("--count", args->count, "Frames from the start (-1 = all)");
+  cmd->add_option("--config", args->config, "Odometry YAML options (strict keys)");
+  cmd->add_option("--preset", args->preset, "default | fast")->check(CLI::IsMember({"default", "fast"}));
+  cmd->add_option("--camera", args->camera_file, "DSO camera file (image-folder sequences only)");
+  cmd->add_flag("--json", args->json, "Print exactly one JSON object on stdout");
+  AddPredictionOptions(cmd, &args->predictions);
+}
+
+ExperimentSetup OpenExperiment(const ExperimentArgs& args) {
+  ExperimentSetup setup;
+  setup.options = vo::OdometryOptions::Preset(args.preset);
+  if (!args.config.empty()) setup.options = vo::LoadOdometryOptions(args.config, setup.options);
+  setup.sequence = OpenSequence(args.sequence, args.camera_file);
+  setup.gt = ReadTrajectory(args.gt, TrajectoryFormat::kKitti);
+  const int frames = args.count < 0 ? setup.sequence->size() : std::min(args.count, setup.sequence->size());
+  RequireFile(static_cast<int>(setup.gt.size()) >= frames, args.gt,
+              "has " + std::to_string(setup.gt.size()) + " poses for " + std::to_string(frames) + " frames");
+  setup.predictions = OpenPredictionSource(args.predictions, *setup.sequence);
+  setup.options.dvso.virtual_baseline = setup.predictions.virtual_baseline;
+  return setup;
+}
+
+std::vector<VariantResult> TuneVirtualBaseline(const ExperimentSetup& setup, const std::vector<double>& values,
+                                               int count, const std::string& out_dir, double* best, bool progress) {
+  std::vector<VariantResult> results;
+  std::unique_ptr<ProgressBar> bar;
+  if (progress) bar = std::make_unique<ProgressBar>("tune-baseline", static_cast<long>(values.size()));
+  double best_t_rel = std::numeric_limits<double>::infinity();
+  for (const double b : values) {
+    vo::OdometryOptions options = setup.options;
+    options.dvso.virtual_baseline = b;
+    std::ostringstream name;
+    name << std::fixed << std::setprecision(3) << b;
+    results.push_back(RunVariant("b_v=" + name.str(), *setup.sequence, setup.gt, vo::OdometryMode::kDvso, options,
+                                 setup.predictions.source.get(), count, JoinPath(out_dir, "bv_" + name.str())));
+    if (results.back().lost == 0 && results.back().TuningError() < best_t_rel) {
+      best_t_rel = results.back().TuningError();
+      *best = b;
+    }
+    if (bar) bar->Update(static_cast<long>(results.size()), results.back().name);
+  }
+  if (bar) bar->Finish();
+  Require(std::isfinite(best_t_rel), "tune-baseline: every run lost tracking");
+  return results;
+}
+
+std::vector<double> ParseRange(const std::string& text) {
+  std::vector<double> parts;
+  std::stringstream in(text);
+  for (std::string item; std::getline(in, item, ':');) {
+    try {
+      size_t used = 0;
+      parts.push_back(std::stod(item, &used));
+      Require(used == item.size(), "");
+    } catch (const std::exception&) {
+      throw Error("--values '" + text + "': expected start:step:end (metres), e.g. 0.3:0.05:0.8");
+    }
+  }
+  Require(parts.size() == 3 && parts[1] > 0 && parts[0] > 0 && parts[2] >= parts[0],
+          "--values '" + text + "': expected start:step:end with 0 < start <= end and step > 0");
+  std::vector<double> values;
+  const int n = static_cast<int>(std::floor((parts[2] - parts[0]) / parts[1] + 1e-9)) + 1;
+  for (int i = 0; i < n; ++i) values.push_back(parts[0] + i * parts[1]);
+  return values;
+}
+
+std::string FormatVariantTable(const std::vector<VariantResult>& results) {
+  std::ostringstream out;
+  out << std::left << std::setw(14) << "variant" << std::right << std::setw(10) << "t_rel %" << std::setw(16)
+      << "r_rel deg/100m" << std::setw(12) << "Sim3 scale" << std::setw(11) << "ATE m" << std::setw(11)
+      << "ms/frame" << std::setw(6) << "lost" << "\n";
+  out << std::fixed;
+  for (const VariantResult& r : results) {
+    out << std::left << std::setw(14) << (r.name + (r.aligned ? "*" : "")) << std::right << std::setprecision(3)
+        << std::setw(10) << r.t_rel << std::setw(16) << r.r_rel << std::setprecision(4) << std::setw(12)
+        << r.sim3_scale << std::setprecision(3) << std::setw(11) << r.ate_rmse << std::setprecision(1)
+        << std::setw(11) << r.ms_per_frame << std::setw(6) << r.lost << "\n";
+  }
+  out << "(* after Sim(3) alignment; every other row is unaligned, KITTI protocol)\n";
+  return out.str();
+}
+
+}  // namespace dvso::cli

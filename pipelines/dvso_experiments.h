@@ -1,0 +1,72 @@
+// Shared by `dvso ablation` and `dvso tune-baseline`: runs one odometry
+// variant over a sequence with ground truth and measures it with the KITTI
+// protocol (unaligned t_rel / r_rel for the metric modes, Sim(3) for mono).
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "core/disparity_source.h"
+#include "core/sequence.h"
+#include "core/trajectory.h"
+#include "pipelines/prediction_source.h"
+#include "vo/system/odometry_options.h"
+
+namespace dvso::cli {
+
+struct VariantResult {
+  std::string name;
+  double t_rel = 0;         // percent; unaligned (Sim(3)-aligned for mono)
+  double r_rel = 0;         // deg / 100 m; same alignment as t_rel
+  double sim3_scale = 0;    // scale of the Sim(3) alignment estimate -> GT (1 = metric)
+  double ate_rmse = 0;      // metres; unaligned (Sim(3)-aligned for mono)
+  double ms_per_frame = 0;  // odometry time per frame (excl. image reading)
+  int lost = 0;
+  int resets = 0;
+  bool aligned = false;     // metrics after Sim(3) alignment (mono)
+  int segments = 0;         // KITTI segments evaluated (0: path shorter than 100 m, t_rel / r_rel undefined)
+  // What tune-baseline minimises: t_rel, or the ATE when the path is too short for KITTI segments.
+  double TuningError() const { return segments > 0 ? t_rel : ate_rmse; }
+  nlohmann::json ToJson() const;
+};
+
+// Runs `mode` with `options` over the first `count` frames (-1 = all) of
+// `sequence`, writing the usual outputs into out_dir, and evaluates against
+// gt (one pose per sequence frame, KITTI order).
+VariantResult RunVariant(const std::string& name, const SequenceReader& sequence, const Trajectory& gt,
+                         vo::OdometryMode mode, const vo::OdometryOptions& options, DisparitySource* predictions,
+                         int count, const std::string& out_dir);
+
+// Options both experiment commands take.
+struct ExperimentArgs {
+  std::string sequence, gt, out, config, preset = "default", camera_file;
+  int count = -1;
+  bool json = false;
+  PredictionSourceArgs predictions;
+};
+void AddExperimentOptions(CLI::App* cmd, ExperimentArgs* args);
+
+// What the experiments share once opened: sequence, GT, base options, predictions.
+struct ExperimentSetup {
+  std::unique_ptr<SequenceReader> sequence;
+  Trajectory gt;
+  vo::OdometryOptions options;   // preset + config; dvso.virtual_baseline = the default b_v
+  PredictionSource predictions;
+};
+ExperimentSetup OpenExperiment(const ExperimentArgs& args);
+
+// Grid search of the virtual baseline (paper "tb"): full DVSO (in+vs+lr) per
+// value; returns the results in order and sets *best to the value with the
+// lowest unaligned t_rel (ATE on paths shorter than 100 m), among runs that never lost tracking.
+std::vector<VariantResult> TuneVirtualBaseline(const ExperimentSetup& setup, const std::vector<double>& values,
+                                               int count, const std::string& out_dir, double* best, bool progress);
+
+// "start:step:end" (inclusive) -> values; throws dvso::Error on bad text.
+std::vector<double> ParseRange(const std::string& text);
+
+// Table of results in the paper's Table 3 layout.
+std::string FormatVariantTable(const std::vector<VariantResult>& results);
+
+}  // namespace dvso::cli
