@@ -1,4 +1,5 @@
 #include "vo/frontend/coarse_tracker.h"
+#include "vo/optimization/photometric_kernel.h"
 
 #include <Eigen/Cholesky>
 #include <cmath>
@@ -95,7 +96,7 @@ CoarseTracker::LevelStats CoarseTracker::Evaluate(const PyramidLevel& target, in
     const Eigen::Vector3f hit = target.Interpolate(u, v);
     const float r = hit[0] - ea * p.intensity - bf;
     const float gx = hit[1], gy = hit[2];
-    const float wg = c2 / (c2 + gx * gx + gy * gy);
+    const float wg = GradientWeight(c2, gx, gy);
     const float ar = std::fabs(r);
     ++stats.num;
     if (want_flow) {
@@ -109,21 +110,12 @@ CoarseTracker::LevelStats CoarseTracker::Evaluate(const PyramidLevel& target, in
       continue;
     }
     ++stats.num_inliers;
-    const float hw = ar < huber ? 1.0f : huber / ar;
-    stats.energy += wg * (ar < huber ? r * r : huber * (2 * ar - huber));
+    float hw, rho;
+    HuberWeightAndEnergy(r, huber, &hw, &rho);
+    stats.energy += wg * rho;
     if (H == nullptr) continue;
     // Inverse depth of the point in the new camera: idepth_new = idepth * iz.
-    const float id_new = p.idepth * iz;
-    const float dxf = gx * fx, dyf = gy * fy;
-    Eigen::Matrix<float, 8, 1> J;
-    J[0] = id_new * dxf;
-    J[1] = id_new * dyf;
-    J[2] = -id_new * (un * dxf + vn * dyf);
-    J[3] = -un * vn * dxf - (1 + vn * vn) * dyf;
-    J[4] = (1 + un * un) * dxf + un * vn * dyf;
-    J[5] = -vn * dxf + un * dyf;
-    J[6] = -ea * p.intensity;
-    J[7] = -1.0f;
+    const Eigen::Matrix<float, 8, 1> J = PoseAffineJacobian(gx * fx, gy * fy, un, vn, p.idepth * iz, ea, p.intensity);
     const float w = hw * wg;
     Hf.noalias() += (w * J) * J.transpose();
     gf.noalias() += (w * r) * J;

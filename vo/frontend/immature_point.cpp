@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "core/error.h"
+#include "vo/optimization/photometric_kernel.h"
 
 namespace dvso::vo {
 
@@ -55,15 +56,6 @@ bool ImmaturePoint::ReadyForActivation(const ImmaturePointOptions& options) cons
   return status_ok && HasFiniteInterval() && idepth_min >= 0 &&
          last_pixel_interval < options.max_pixel_interval && quality > options.min_quality;
 }
-
-namespace {
-
-inline float HuberEnergy(float r, float k) {
-  const float ar = std::fabs(r);
-  return ar < k ? r * r : k * (2 * ar - k);
-}
-
-}  // namespace
 
 TraceStatus ImmaturePoint::Trace(const PyramidLevel& target, const Eigen::Matrix3f& KRKi, const Eigen::Vector3f& Kt,
                                  float a, float b, const ImmaturePointOptions& opt, float max_search_px) {

@@ -1,4 +1,5 @@
 #include "vo/frontend/mono_initializer.h"
+#include "vo/optimization/photometric_kernel.h"
 
 #include <Eigen/Cholesky>
 #include <algorithm>
@@ -117,22 +118,13 @@ double MonoInitializer::Evaluate(const ImagePyramid& frame, int level, const Eig
       const Eigen::Vector3f hit = target.Interpolate(u, v);
       const float r = hit[0] - ea * i_host - static_cast<float>(b);
       const float gx = hit[1], gy = hit[2];
-      const float wg = c2 / (c2 + gx * gx + gy * gy);
-      const float ar = std::fabs(r);
-      const float hw = ar < huber ? 1.0f : huber / ar;
-      energy += wg * (ar < huber ? r * r : huber * (2 * ar - huber));
+      const float wg = GradientWeight(c2, gx, gy);
+      float hw, huber_energy;
+      HuberWeightAndEnergy(r, huber, &hw, &huber_energy);
+      energy += wg * huber_energy;
       if (!want_system) continue;
-      const float id_new = rho * iz;
       const float dxf = gx * fx, dyf = gy * fy;
-      Eigen::Matrix<float, 8, 1> J;
-      J[0] = id_new * dxf;
-      J[1] = id_new * dyf;
-      J[2] = -id_new * (un * dxf + vn * dyf);
-      J[3] = -un * vn * dxf - (1 + vn * vn) * dyf;
-      J[4] = (1 + un * un) * dxf + un * vn * dyf;
-      J[5] = -vn * dxf + un * dyf;
-      J[6] = -ea * i_host;
-      J[7] = -1.0f;
+      const Eigen::Matrix<float, 8, 1> J = PoseAffineJacobian(dxf, dyf, un, vn, rho * iz, ea, i_host);
       // d(u, v)/d rho: q depends on rho through t * rho.
       const float jp = dxf * (t.x() - un * t.z()) * iz + dyf * (t.y() - vn * t.z()) * iz;
       const float w = hw * wg;

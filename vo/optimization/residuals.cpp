@@ -29,10 +29,6 @@ bool SampleDisparity(const cv::Mat& map, float x, float y, float* value, float* 
   return true;
 }
 
-inline float GradientWeight(float c_sq, const Eigen::Vector3f& sample) {
-  return c_sq / (c_sq + sample[1] * sample[1] + sample[2] * sample[2]);
-}
-
 void EvaluateVirtualStereo(const ResidualGeometry& g, const Point& point, double idepth,
                            const WindowOptions& options, bool with_jacobians, ResidualEvaluation* out) {
   const float gamma = static_cast<float>(options.huber_threshold);
@@ -62,7 +58,7 @@ void EvaluateVirtualStereo(const ResidualGeometry& g, const Point& point, double
     const float r = sample[0] - point.host_intensity[k];
     float huber_weight, rho;
     HuberWeightAndEnergy(r, gamma, &huber_weight, &rho);
-    const float w_p = g.term_weight * GradientWeight(c_sq, sample);
+    const float w_p = g.term_weight * GradientWeight(c_sq, sample[1], sample[2]);
     energy += w_p * rho;
     out->r[k] = r;
     if (with_jacobians) {
@@ -192,7 +188,7 @@ void EvaluateResidual(const ResidualGeometry& g, const Point& point, double idep
     const float r = (sample[0] - g.b_target) - g.affine_scale * host_term;
     float huber_weight, rho;
     HuberWeightAndEnergy(r, gamma, &huber_weight, &rho);
-    const float w_p = g.term_weight * GradientWeight(c_sq, sample);
+    const float w_p = g.term_weight * GradientWeight(c_sq, sample[1], sample[2]);
     energy += w_p * rho;
     out->r[k] = r;
     if (!with_jacobians) continue;
@@ -217,17 +213,9 @@ void EvaluateResidual(const ResidualGeometry& g, const Point& point, double idep
       out->J_pair.row(k).setZero();
       continue;
     }
-    // Pose (left twist of the relative pose). With X = q / d and
-    // d_t = d / q_z (inverse depth in the target):
-    //  d un / d xi = [d_t, 0, -d_t un, -un vn, 1 + un^2, -vn]
-    //  d vn / d xi = [0, d_t, -d_t vn, -(1 + vn^2), un vn, un]
-    const float dt = d * inv_q0z;
-    out->J_pair(k, 0) = gx * dt;
-    out->J_pair(k, 1) = gy * dt;
-    out->J_pair(k, 2) = -dt * (gx * u0 + gy * v0);
-    out->J_pair(k, 3) = -gx * u0 * v0 - gy * (1.0f + v0 * v0);
-    out->J_pair(k, 4) = gx * (1.0f + u0 * u0) + gy * u0 * v0;
-    out->J_pair(k, 5) = -gx * v0 + gy * u0;
+    // Pose (left twist of the relative pose, photometric_kernel.h) with
+    // X = q / d and d_t = d / q_z the inverse depth in the target.
+    out->J_pair.row(k).head<6>() = PoseJacobian(gx, gy, u0, v0, d * inv_q0z).transpose();
     // Affine: r = (I_j - b_j) - e^{a_j - a_i} (I_i - b_i).
     out->J_pair(k, 6) = g.affine_scale * host_term;   // d/da_i
     out->J_pair(k, 7) = g.affine_scale;               // d/db_i

@@ -22,6 +22,7 @@
 #include <Eigen/Core>
 
 #include "vo/optimization/frame_parameters.h"
+#include "vo/optimization/photometric_kernel.h"
 #include "vo/optimization/window.h"
 
 namespace dvso::vo {
@@ -87,18 +88,6 @@ void PrefetchResidual(const ResidualGeometry& geometry, const Point& point, doub
 // energies across an LM step (so that leaving the image is not "free").
 inline float CappedResidualEnergy(const WindowOptions& options) {
   return static_cast<float>(kPatternSize * options.outlier_energy_threshold);
-}
-
-// Huber weight and energy for one pixel residual (see header comment).
-inline void HuberWeightAndEnergy(float r, float gamma, float* weight, float* energy) {
-  const float abs_r = std::abs(r);
-  if (abs_r <= gamma) {
-    *weight = 1.0f;
-    *energy = r * r;
-  } else {
-    *weight = gamma / abs_r;
-    *energy = 2.0f * gamma * abs_r - gamma * gamma;
-  }
 }
 
 }  // namespace dvso::vo
