@@ -93,9 +93,10 @@ class EurocSequence : public SequenceReader {
   explicit EurocSequence(const std::string& root) : root_(root) {
     const std::string mav = fs::is_directory(JoinPath(root, "mav0")) ? JoinPath(root, "mav0") : root;
     const EurocCamera cam0 = ReadEurocCamera(JoinPath(mav, "cam0"));
-    const bool has_cam1 = fs::is_directory(JoinPath(mav, "cam1"));
-    if (!has_cam1) {
-      throw Error(JoinPath(mav, "cam1"), "missing: the EuRoC reader needs both cameras for a rectified pair");
+    size0_ = cam0.size;
+    if (!fs::is_directory(JoinPath(mav, "cam1"))) {
+      InitializeMonocular(cam0);
+      return;
     }
     const EurocCamera cam1 = ReadEurocCamera(JoinPath(mav, "cam1"));
     // Pair frames by timestamp (nearest within 2 ms; EuRoC stamps are identical).
@@ -137,7 +138,7 @@ class EurocSequence : public SequenceReader {
   }
 
   int size() const override { return static_cast<int>(left_files_.size()); }
-  bool is_stereo() const override { return true; }
+  bool is_stereo() const override { return !right_files_.empty(); }
   bool has_color() const override { return false; }
   const StereoCamera& camera() const override { return camera_; }
   const std::vector<double>& timestamps() const override { return timestamps_; }
@@ -152,7 +153,7 @@ class EurocSequence : public SequenceReader {
     frame.index = index;
     frame.timestamp = timestamps_[index];
     cv::remap(internal::LoadGreyImage(left_files_[index], size0_), frame.left, map0x_, map0y_, cv::INTER_LINEAR);
-    if (options.load_right) {
+    if (options.load_right && is_stereo()) {
       cv::remap(internal::LoadGreyImage(right_files_[index], size1_), frame.right, map1x_, map1y_,
                 cv::INTER_LINEAR);
     }
@@ -160,6 +161,26 @@ class EurocSequence : public SequenceReader {
   }
 
  private:
+  // cam0 only (monocular use, e.g. DVSO): undistorted with the same focal
+  // length, no baseline.
+  void InitializeMonocular(const EurocCamera& cam0) {
+    left_files_ = cam0.files;
+    for (const int64_t ns : cam0.stamps_ns) timestamps_.push_back(ns * 1e-9);
+    RequireFile(!left_files_.empty(), root_, "no cam0 frames");
+    // Without distortion the intrinsics stay; with it, the valid-pixels-only camera (alpha 0).
+    const cv::Mat K = cv::norm(cam0.distortion) == 0.0
+                          ? cv::Mat(cam0.K.clone())
+                          : cv::getOptimalNewCameraMatrix(cam0.K, cam0.distortion, cam0.size, 0.0, cam0.size);
+    cv::initUndistortRectifyMap(cam0.K, cam0.distortion, cv::Mat(), K, cam0.size, CV_32FC1, map0x_, map0y_);
+    camera_.left.fx = K.at<double>(0, 0);
+    camera_.left.fy = K.at<double>(1, 1);
+    camera_.left.cx = K.at<double>(0, 2);
+    camera_.left.cy = K.at<double>(1, 2);
+    camera_.left.width = cam0.size.width;
+    camera_.left.height = cam0.size.height;
+    camera_.baseline = 0;
+  }
+
   std::string root_;
   std::vector<std::string> left_files_, right_files_;
   std::vector<double> timestamps_;

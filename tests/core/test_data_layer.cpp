@@ -290,6 +290,17 @@ TEST(SequenceReader, EurocIsRectifiedWithMetricBaseline) {
   const StereoFrame f = seq->Read(0);
   EXPECT_EQ(f.left.size(), cv::Size(w, h));
   EXPECT_FALSE(f.right.empty());
+  EXPECT_EQ(seq->FrameName(1), "1050000000");
+  // cam0 alone: a monocular sequence (DVSO reads only the left camera).
+  fs::remove_all(root + "/mav0/cam1");
+  auto mono = OpenSequence(root);
+  EXPECT_FALSE(mono->is_stereo());
+  EXPECT_EQ(mono->size(), 2);
+  EXPECT_NEAR(mono->camera().left.fx, 50.0, 1e-6);  // no distortion: the intrinsics stay
+  EXPECT_DOUBLE_EQ(mono->camera().baseline, 0.0);
+  const StereoFrame m = mono->Read(1);
+  EXPECT_EQ(m.left.size(), cv::Size(w, h));
+  EXPECT_TRUE(m.right.empty());
 }
 
 TEST(SequenceReader, MonocularFolderNeedsCameraFile) {
