@@ -1,7 +1,8 @@
 // `dvso demo`: the whole toolkit on data the repo generates itself — a
 // synthetic street along a real KITTI trajectory, stereo and monocular
 // odometry, their KITTI-protocol evaluation with plots, and Stereo-DSO labels
-// checked against the exact ground truth. With LibTorch and a committed
+// checked against the exact ground truth, and DVSO (monocular + the network's
+// disparities) without alignment. With LibTorch and a committed
 // model, the depth network is run on it too (pipelines/torch_demo.cpp).
 #include <filesystem>
 #include <fstream>
@@ -18,6 +19,7 @@
 #include "core/trajectory.h"
 #include "pipelines/commands.h"
 #include "pipelines/demo_steps.h"
+#include "pipelines/prediction_source.h"
 #include "sdso_labels/label_runner.h"
 #include "vo/system/odometry_options.h"
 #include "vo/system/sequence_runner.h"
@@ -29,7 +31,7 @@ namespace {
 struct DemoArgs {
   std::string out = "demo_out";
   std::string data_dir = DVSO_SOURCE_DIR "/data";
-  std::string model = DVSO_SOURCE_DIR "/models/stacknet_small.pt";
+  std::string model = std::string(DVSO_SOURCE_DIR) + "/" + kShippedModel;
   std::string kitti_sequence = "07";
   int first = 0;
   int frames = 150;
@@ -77,7 +79,7 @@ void RunDemo(const DemoArgs& args) {
   const vo::OdometryOptions odometry = vo::OdometryOptions::Preset("default");
   vo::SequenceRunOptions run;
   run.progress = !args.quiet;
-  std::cout << "\n== 2/4 odometry (stereo, then mono)" << std::endl;
+  std::cout << "\n== 2/4 odometry (stereo, mono, dvso)" << std::endl;
   const auto stereo = vo::RunOdometryOnSequence(*sequence, odometry, vo::OdometryMode::kStereo,
                                                 JoinPath(args.out, "odometry_stereo"), run);
   const auto mono = vo::RunOdometryOnSequence(*sequence, odometry, vo::OdometryMode::kMono,
@@ -90,6 +92,34 @@ void RunDemo(const DemoArgs& args) {
                                          "monocular odometry (Sim3-aligned: scale is not observable)");
   summary["odometry_mono"]["ms_per_frame"] = mono.mean_ms;
   summary["odometry_mono"]["lost_frames"] = mono.lost;
+
+  // DVSO: the left images only, metric from the network's disparities (or,
+  // without LibTorch / model, from the simulator's exact ones).
+  PredictionSourceArgs prediction_args;
+  std::string dvso_label = "dvso odometry with the model (monocular, no alignment)";
+#ifdef DVSO_WITH_TORCH
+  const bool have_model = std::filesystem::is_regular_file(args.model);
+#else
+  const bool have_model = false;
+#endif
+  if (have_model) {
+    prediction_args.model = args.model;
+  } else {
+    prediction_args.disparity_left = JoinPath(sequence_dir, "disp_0");
+    prediction_args.disparity_right = JoinPath(sequence_dir, "disp_1");
+    dvso_label = "dvso odometry with the exact disparities (no model in this build; no alignment)";
+  }
+  const PredictionSource predictions = OpenPredictionSource(prediction_args, *sequence);
+  vo::OdometryOptions dvso_options = odometry;
+  dvso_options.dvso.virtual_baseline = predictions.virtual_baseline;
+  vo::SequenceRunOptions dvso_run = run;
+  dvso_run.predictions = predictions.source.get();
+  const auto dvso = vo::RunOdometryOnSequence(*sequence, dvso_options, vo::OdometryMode::kDvso,
+                                              JoinPath(args.out, "odometry_dvso"), dvso_run);
+  summary["odometry_dvso"] = EvaluateRun(gt, JoinPath(args.out, "odometry_dvso"), AlignmentMode::kNone, dvso_label);
+  summary["odometry_dvso"]["ms_per_frame"] = dvso.mean_ms;
+  summary["odometry_dvso"]["lost_frames"] = dvso.lost;
+  summary["odometry_dvso"]["predictions"] = predictions.description;
 
   // 3. Stereo DSO sparse disparity labels, against the exact GT disparity.
   std::cout << "\n== 3/4 labels (Stereo DSO sparse disparity)" << std::endl;
@@ -114,7 +144,7 @@ void RunDemo(const DemoArgs& args) {
 
 void AddDemoCommand(CLI::App& app) {
   auto args = std::make_shared<DemoArgs>();
-  auto* cmd = app.add_subcommand("demo", "Simulate a street sequence, run stereo/mono odometry, labels, evaluate");
+  auto* cmd = app.add_subcommand("demo", "Simulate a street sequence, run stereo/mono/dvso odometry, labels, evaluate");
   cmd->add_option("--out", args->out, "Output directory")->capture_default_str();
   cmd->add_option("--frames", args->frames, "Frames to simulate")->capture_default_str()->check(CLI::Range(20, 100000));
   cmd->add_option("--first", args->first, "First KITTI pose")->capture_default_str();
