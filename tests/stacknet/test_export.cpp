@@ -4,6 +4,10 @@
 #include <torch/script.h>
 
 #include <filesystem>
+#include <fstream>
+
+#include "core/error.h"
+#include "stacknet/predictor.h"
 
 #include "stacknet/checkpoint.h"
 #include "stacknet/config.h"
@@ -68,7 +72,12 @@ TEST(Export, CheckpointExportUsesTheTrainedNetwork) {
   info.config_yaml = ConfigToYaml(config);
   info.trained_model = "simple";
   SaveCheckpoint((dir / "c.pt").string(), net, nullptr, info);
-  const std::string description = ExportCheckpoint((dir / "c.pt").string(), (dir / "m.pt").string());
+  // The config's sequences are gone: the training camera must be given.
+  EXPECT_THROW(ExportCheckpoint((dir / "c.pt").string(), (dir / "m.pt").string()), Error);
+  ExportOptions options;
+  options.training_baseline = 0.54;
+  options.training_fx_over_width = 0.58;
+  const std::string description = ExportCheckpoint((dir / "c.pt").string(), (dir / "m.pt").string(), options);
   EXPECT_NE(description.find("SimpleNet"), std::string::npos) << description;
   torch::jit::Module loaded = torch::jit::load((dir / "m.pt").string());
   EXPECT_FALSE(loaded.attr("uses_residual").toBool());
@@ -77,6 +86,47 @@ TEST(Export, CheckpointExportUsesTheTrainedNetwork) {
   torch::NoGradGuard no_grad;
   const auto [left, right] = InferPixels(net, false, image);
   EXPECT_LT(MaxDifference(loaded.forward({image}).toTuple()->elements()[0].toTensor(), left), 1e-5);
+  // The metadata travels in the file (also readable from Python's torch.jit.load(_extra_files=...)).
+  const ModelMetadata metadata = ReadModelMetadata((dir / "m.pt").string());
+  EXPECT_DOUBLE_EQ(metadata.baseline, 0.54);
+  EXPECT_DOUBLE_EQ(metadata.fx_over_width, 0.58);
+  EXPECT_EQ(metadata.input_width, config.network.input_width);
+  EXPECT_EQ(metadata.model_kind, "simple");
+  const TorchDisparityPredictor predictor((dir / "m.pt").string());
+  EXPECT_DOUBLE_EQ(predictor.metadata().baseline, 0.54);
+  // Stamping metadata onto a file keeps the network.
+  ModelMetadata stamped = metadata;
+  stamped.baseline = 0.3;
+  WriteModelWithMetadata((dir / "m.pt").string(), (dir / "s.pt").string(), stamped);
+  EXPECT_DOUBLE_EQ(ReadModelMetadata((dir / "s.pt").string()).baseline, 0.3);
+  fs::remove_all(dir);
+}
+
+TEST(Export, PredictorRejectsFilesThatAreNotDvsoModelsWithOneLine) {
+  const fs::path dir = fs::temp_directory_path() / ("dvso_export_bad_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  {
+    std::ofstream((dir / "text.pt").string()) << "not a model";
+  }
+  try {
+    TorchDisparityPredictor p((dir / "text.pt").string());
+    FAIL() << "a text file loaded as a model";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("text.pt"), std::string::npos) << e.what();
+  }
+  // A TorchScript module whose output is one map instead of (left, right).
+  torch::jit::Module one("OneMap");
+  one.register_attribute("input_width", c10::IntType::get(), c10::IValue(int64_t{64}));
+  one.register_attribute("input_height", c10::IntType::get(), c10::IValue(int64_t{32}));
+  one.define("def forward(self, x):\n  return x[:, 0:1]\n");
+  one.save((dir / "one.pt").string());
+  TorchDisparityPredictor predictor((dir / "one.pt").string());
+  try {
+    predictor.PredictImage(cv::Mat(20, 40, CV_8UC1, cv::Scalar(100)));
+    FAIL() << "a one-map output was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("not 2 float maps"), std::string::npos) << e.what();
+  }
   fs::remove_all(dir);
 }
 
