@@ -12,7 +12,7 @@
 #      docs/stacknet_metrics.json, docs/stacknet_heldout.png (image / GT / SimpleNet /
 #      StackNet), docs/stacknet_learning_curve.{csv,png}.
 #
-#   scripts/train_stacknet.sh [all|data|train|export|eval]    (default: all)
+#   scripts/train_stacknet.sh [all|data|train|monitor|export|eval]    (default: all)
 # Environment:
 #   DVSO=build/dvso                      binary (build with scripts/build.sh)
 #   CONFIG=configs/stacknet_cpu_main.yaml  its data paths must point into $DATA
@@ -111,35 +111,44 @@ curve_eval() {  # checkpoint tag
   rm -rf "$dir"
 }
 
+# One learning-curve CSV row from an epochs.jsonl record, its index and (optional) eval-depth JSON.
+curve_row() {  # record index metrics
+  python3 - "$1" "$2" "${3:-}" <<'EOF'
+import json, sys
+r = json.loads(sys.argv[1])
+m = json.loads(sys.argv[3]) if sys.argv[3].strip() else {}
+metrics = ["%.4f" % m[k] if k in m else "" for k in ("abs_rel", "sq_rel", "rmse", "a1")]
+print(",".join([sys.argv[2], str(r["stage"]), r["stage_name"], str(r["global_step"]), "%.5f" % r["mean_total"],
+                "%.5f" % r["mean_supervised"], "%.5f" % r["mean_unsupervised"]] + metrics))
+EOF
+}
+
 # Follows a running training: after each epoch's checkpoint, evaluates it and
 # appends a row to $RUN/curve.csv (epoch line, stage, step, loss, held-out metrics).
+# Epochs whose checkpoint was already overwritten get the loss only.
 curve_monitor() {
-  local csv="$RUN/curve.csv" done_rows
+  local csv="$RUN/curve.csv" done_rows lines metrics ck="$RUN/curve_checkpoint.pt"
   [[ -f "$csv" ]] || echo "epoch,stage,stage_name,global_step,mean_total,mean_supervised,mean_unsupervised,abs_rel,sq_rel,rmse,a1" > "$csv"
   while true; do
     done_rows=$(($(wc -l < "$csv") - 1))
-    local lines=0
+    lines=0
     [[ -f "$RUN/epochs.jsonl" ]] && lines=$(wc -l < "$RUN/epochs.jsonl")
     if (( lines > done_rows )) && [[ "$RUN/checkpoint_last.pt" -nt "$RUN/epochs.jsonl" ]]; then
-      local row ck="$RUN/curve_checkpoint.pt"
-      # Only the newest epoch has a checkpoint; older missing rows get the loss only.
       cp "$RUN/checkpoint_last.pt" "$ck"
       while (( done_rows < lines - 1 )); do
-        row=$(sed -n "$((done_rows + 1))p" "$RUN/epochs.jsonl")
-        python3 -c 'import json,sys; r=json.loads(sys.argv[1]); print(f"{sys.argv[2]},{r[\"stage\"]},{r[\"stage_name\"]},{r[\"global_step\"]},{r[\"mean_total\"]:.5f},{r[\"mean_supervised\"]:.5f},{r[\"mean_unsupervised\"]:.5f},,,,")' \
-          "$row" "$done_rows" >> "$csv"
+        curve_row "$(sed -n "$((done_rows + 1))p" "$RUN/epochs.jsonl")" "$done_rows" >> "$csv"
         done_rows=$((done_rows + 1))
       done
-      row=$(sed -n "${lines}p" "$RUN/epochs.jsonl")
-      local metrics
-      metrics=$(curve_eval "$ck" "epoch$lines" || echo '{}')
-      python3 -c 'import json,sys; r=json.loads(sys.argv[1]); m=json.loads(sys.argv[3] or "{}"); g=lambda k: f"{m[k]:.4f}" if k in m else ""; print(f"{sys.argv[2]},{r[\"stage\"]},{r[\"stage_name\"]},{r[\"global_step\"]},{r[\"mean_total\"]:.5f},{r[\"mean_supervised\"]:.5f},{r[\"mean_unsupervised\"]:.5f},{g(\"abs_rel\")},{g(\"sq_rel\")},{g(\"rmse\")},{g(\"a1\")}")' \
-        "$row" "$((lines - 1))" "$metrics" >> "$csv"
+      metrics=$(curve_eval "$ck" "epoch$lines" || echo "")
+      curve_row "$(sed -n "${lines}p" "$RUN/epochs.jsonl")" "$((lines - 1))" "$metrics" >> "$csv"
       rm -f "$ck"
       log "curve: $(tail -1 "$csv")"
     fi
-    [[ -f "$RUN/checkpoint_final.pt" ]] && (( lines <= $(($(wc -l < "$csv") - 1)) )) && break
-    [[ -f "$RUN/train.done" ]] && break
+    lines=0
+    [[ -f "$RUN/epochs.jsonl" ]] && lines=$(wc -l < "$RUN/epochs.jsonl")
+    if [[ -f "$RUN/checkpoint_final.pt" || -f "$RUN/train.done" ]] && (( lines <= $(wc -l < "$csv") - 1 )); then
+      break
+    fi
     sleep 30
   done
 }
@@ -221,7 +230,8 @@ case "$STEP" in
   all) step_data; step_train; step_export; step_eval ;;
   data) step_data ;;
   train) step_train ;;
+  monitor) curve_monitor ;;  # the curve of a training started elsewhere
   export) step_export ;;
   eval) step_eval ;;
-  *) echo "usage: $0 [all|data|train|export|eval]" >&2; exit 2 ;;
+  *) echo "usage: $0 [all|data|train|monitor|export|eval]" >&2; exit 2 ;;
 esac
