@@ -10,7 +10,8 @@
 #   4. export SimpleNet (after its stages) and StackNet (final);
 #   5. evaluate both on the held-out frames (`dvso eval-depth`, 0-80 m) and write
 #      docs/stacknet_metrics.json, docs/stacknet_heldout.png (image / GT / SimpleNet /
-#      StackNet), docs/stacknet_learning_curve.{csv,png}.
+#      StackNet), docs/stacknet_learning_curve.{csv,png}; the real KITTI 2015 pair in data/ (abs rel, a
+#      domain-gap figure) and docs/stacknet_real.png.
 #
 #   scripts/train_stacknet.sh [all|data|train|monitor|export|eval]    (default: all)
 # Environment:
@@ -19,6 +20,7 @@
 #   DATA=/tmp/dvso_stacknet_v2           rendered sequences and labels (~6 GB)
 #   RUN=$DATA/run_main                   checkpoints, logs, exported models, predictions
 #   DOCS=docs                            where metrics and figures go
+#   SNIPPETS=/work/shared/data/kitti_odometry_snippets  real KITTI frames (no depth GT) for a figure
 #   NICE=19                              niceness of the heavy steps (the machine is shared)
 #   REPO=(script's parent)               repository root (when running a copy of this script)
 # Ablation (documented, not the paper's way): CONFIG=configs/stacknet_cpu_main_gt.yaml
@@ -34,6 +36,7 @@ RUN=${RUN:-$DATA/run_main}
 DOCS=${DOCS:-docs}
 NICE=${NICE:-19}
 FIGURES=${FIGURES:-$(dirname "$DVSO")/tools/stacknet_figures}
+SNIPPETS=${SNIPPETS:-/work/shared/data/kitti_odometry_snippets}
 RENDER_W=640
 RENDER_H=192
 run() { nice -n "$NICE" "$@"; }
@@ -198,6 +201,18 @@ step_eval() {
       rm -rf "$sub"
     done
   done
+  # Real images (domain gap): the KITTI 2015 pair with its GT, and the real odometry snippets (no depth GT).
+  local k15=data/kitti_stereo_2015_sample
+  for net in simplenet stacknet; do
+    run "$DVSO" predict --model "$RUN/$net.pt" --images "$k15/image_2" --out "$RUN/real_k15_$net" > /dev/null
+    run "$DVSO" eval-depth --pred "$RUN/real_k15_$net/left" --gt "$k15/disp_occ_0" --kitti-focal --max-depth 80 \
+      --json > "$RUN/metrics_k15_$net.json"
+    if [[ -d "$SNIPPETS/a/image_0" ]]; then
+      for s in a b; do
+        run "$DVSO" predict --model "$RUN/$net.pt" --images "$SNIPPETS/$s/image_0" --out "$RUN/real_${s}_$net" > /dev/null
+      done
+    fi
+  done
   python3 - "$RUN" "$DOCS/stacknet_metrics.json" "$CONFIG" <<'EOF'
 import json, sys, os
 run, out, config = sys.argv[1:4]
@@ -207,6 +222,9 @@ for net in ("simplenet", "stacknet"):
     result[net] = {"all": json.load(open(f"{run}/metrics_{net}.json"))}
     for seq in ("te08", "te09", "te10"):
         result[net][seq] = json.load(open(f"{run}/metrics_{net}_{seq}.json"))
+    k15 = f"{run}/metrics_k15_{net}.json"
+    if os.path.exists(k15):
+        result[net]["kitti2015_000046_10"] = json.load(open(k15))
 secs = f"{run}/train_seconds.txt"
 if os.path.exists(secs):
     result["train_wall_seconds"] = sum(int(l) for l in open(secs) if l.strip())
@@ -220,6 +238,13 @@ EOF
              "$RUN/pred_stacknet/left/$f.png")
     done
     "$FIGURES" montage --out "$DOCS/stacknet_heldout.png" --titles "image,GT disparity,SimpleNet,StackNet" "${rows[@]}"
+    rows=(--row "$k15/image_2/000046_10.png" "$k15/disp_occ_0/000046_10.png" "$RUN/real_k15_simplenet/left/000046_10.png"
+          "$RUN/real_k15_stacknet/left/000046_10.png")
+    if [[ -d "$SNIPPETS/a/image_0" ]]; then
+      rows+=(--row "$SNIPPETS/a/image_0/000020.png" - "$RUN/real_a_simplenet/left/000020.png" "$RUN/real_a_stacknet/left/000020.png"
+             --row "$SNIPPETS/b/image_0/000020.png" - "$RUN/real_b_simplenet/left/000020.png" "$RUN/real_b_stacknet/left/000020.png")
+    fi
+    "$FIGURES" montage --out "$DOCS/stacknet_real.png" --titles "real KITTI image,GT disparity,SimpleNet,StackNet" "${rows[@]}"
     [[ -f "$RUN/curve.csv" ]] && cp "$RUN/curve.csv" "$DOCS/stacknet_learning_curve.csv" &&
       "$FIGURES" curve --csv "$RUN/curve.csv" --out "$DOCS/stacknet_learning_curve.png"
   fi

@@ -3,7 +3,8 @@
 //                            --row IMAGE GT PRED1 PRED2 [--row ...]
 //     side-by-side rows: the colour image, then disparity maps (KITTI uint16
 //     PNG) colour-mapped with one scale per row (the GT's 99th percentile);
-//     GT zero (sky / invalid) is black.
+//     GT zero (sky / invalid) is black; GT "-" = none (real images; scale from
+//     the first prediction).
 //   stacknet_figures curve --csv RUN/curve.csv --out F.png
 //     learning curve: mean training loss per epoch and held-out abs rel per
 //     evaluated epoch, against the global step, stage boundaries marked.
@@ -63,7 +64,10 @@ int Montage(const std::string& out, const std::vector<std::string>& titles, cons
     cv::Mat resized;
     cv::resize(image, resized, tile, 0, 0, cv::INTER_AREA);
     tiles.push_back(resized);
-    const cv::Mat gt = dvso::ReadKittiMapPng(row[1]);
+    // "-" as GT: no ground truth (real images); the scale comes from the first prediction.
+    const bool no_gt = row[1] == "-";
+    Require(!no_gt || columns >= 3, "a row without GT needs a prediction");
+    const cv::Mat gt = dvso::ReadKittiMapPng(no_gt ? row[2] : row[1]);
     std::vector<float> values;
     for (auto it = gt.begin<float>(); it != gt.end<float>(); ++it)
       if (*it > 0) values.push_back(*it);
@@ -73,7 +77,15 @@ int Montage(const std::string& out, const std::vector<std::string>& titles, cons
       std::nth_element(values.begin(), values.begin() + std::min(k, values.size() - 1), values.end());
       scale = std::max(1.0, static_cast<double>(values[std::min(k, values.size() - 1)]));
     }
-    for (size_t c = 1; c < columns; ++c) tiles.push_back(Colourise(dvso::ReadKittiMapPng(row[c]), scale, tile));
+    for (size_t c = 1; c < columns; ++c) {
+      if (c == 1 && no_gt) {
+        tiles.push_back(cv::Mat(tile, CV_8UC3, cv::Scalar(40, 40, 40)));
+        cv::putText(tiles.back(), "no GT", cv::Point(10, tile.height / 2), cv::FONT_HERSHEY_SIMPLEX, 0.6,
+                    cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
+        continue;
+      }
+      tiles.push_back(Colourise(dvso::ReadKittiMapPng(row[c]), scale, tile));
+    }
     cv::Mat line;
     cv::hconcat(tiles, line);
     lines.push_back(line);
