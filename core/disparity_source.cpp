@@ -134,6 +134,11 @@ void AsyncDisparitySource::Prefetch(int index, const cv::Mat& left_image) {
   changed_.notify_all();
 }
 
+bool AsyncDisparitySource::IsReady(int index) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return done_index_ == index;
+}
+
 DisparityPair AsyncDisparitySource::Predict(int index, const cv::Mat& left_image) {
   std::unique_lock<std::mutex> lock(mutex_);
   const bool prefetched = index == running_index_ || index == done_index_ || index == requested_index_;

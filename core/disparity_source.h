@@ -31,6 +31,9 @@ class DisparitySource {
   // Hint that Predict(index, ...) may follow soon (a source with a worker
   // may start on it now). Default: nothing.
   virtual void Prefetch(int /*index*/, const cv::Mat& /*left_image*/) {}
+  // True when Predict(index, ...) would not wait for a worker (a source
+  // without one computes on the caller's thread and is always "ready").
+  virtual bool IsReady(int /*index*/) { return true; }
 };
 
 // How a map is brought to another size. Values always scale with the width.
@@ -66,13 +69,15 @@ class FileDisparitySource : public DisparitySource {
 // caller goes on (e.g. tracks frame i); Predict(i) returns that result, waiting
 // for it, or computes i when it was not prefetched. Holds at most one frame
 // in flight and one result, so memory is bounded. Errors of the wrapped source
-// reach the caller of Predict for that frame.
+// reach the caller of Predict for that frame. All methods are to be called
+// from one thread (the odometry's).
 class AsyncDisparitySource : public DisparitySource {
  public:
   explicit AsyncDisparitySource(std::unique_ptr<DisparitySource> inner);
   ~AsyncDisparitySource() override;
   DisparityPair Predict(int index, const cv::Mat& left_image) override;
   void Prefetch(int index, const cv::Mat& left_image) override;
+  bool IsReady(int index) override;
   int prefetched_used() const { return prefetched_used_; }  // Predict calls served by a prefetch
   int computed_on_demand() const { return computed_on_demand_; }
 

@@ -111,7 +111,7 @@ void RunDemo(const DemoArgs& args) {
   }
   const PredictionSource predictions = OpenPredictionSource(prediction_args, *sequence);
   vo::OdometryOptions dvso_options = odometry;
-  dvso_options.dvso.virtual_baseline = predictions.virtual_baseline;
+  ApplyPredictionSource(prediction_args, predictions, &dvso_options);
   vo::SequenceRunOptions dvso_run = run;
   dvso_run.predictions = predictions.source.get();
   const auto dvso = vo::RunOdometryOnSequence(*sequence, dvso_options, vo::OdometryMode::kDvso,

@@ -34,10 +34,7 @@ void Run(const OdometryArgs& args) {
   PredictionSource predictions;
   if (vo::CapabilitiesOf(mode).has_predictions) {
     predictions = OpenPredictionSource(args.predictions, *sequence);
-    // b_v resolved from the model / files unless the config sets it.
-    if (!(options.dvso.virtual_baseline > 0) || args.predictions.virtual_baseline > 0) {
-      options.dvso.virtual_baseline = predictions.virtual_baseline;
-    }
+    ApplyPredictionSource(args.predictions, predictions, &options);
   } else {
     Require(args.predictions.model.empty() && args.predictions.disparity_left.empty(),
             "--model / --disparity-left/right need --mode dvso");
@@ -46,7 +43,9 @@ void Run(const OdometryArgs& args) {
             << cam.left.height << ", fx " << cam.left.fx << ", baseline " << cam.baseline << " m)\n"
             << "mode: " << vo::ToString(mode) << ", preset: " << args.preset
             << (args.config.empty() ? "" : ", config: " + args.config) << "\n"
-            << (predictions.source ? "predictions: " + predictions.description + "\n" : std::string())
+            << (predictions.source ? "predictions: " + predictions.description + ", " +
+                                         options.dvso.prediction_timing + "\n"
+                                   : std::string())
             << "--- config ---\n"
             << vo::OdometryOptionsToYaml(options) << "--------------\n";
   vo::SequenceRunOptions run;
@@ -61,8 +60,8 @@ void Run(const OdometryArgs& args) {
             << "mean " << s.mean_ms << " ms/frame (max " << s.max_ms << " ms), wall " << s.wall_ms
             << " ms/frame incl. reading\n";
   if (predictions.worker != nullptr) {
-    std::cout << "predictions: " << predictions.worker->prefetched_used() << " keyframes served by the speculative "
-              << "worker, " << predictions.worker->computed_on_demand() << " computed on demand\n";
+    std::cout << "predictions (" << options.dvso.prediction_timing << "): " << predictions.worker->prefetched_used()
+              << " requested ahead, " << predictions.worker->computed_on_demand() << " computed on demand\n";
   }
   if (args.ply) std::cout << "points.ply: " << s.ply_points << " points\n";
   std::cout << "written: " << args.out << "/trajectory.txt, trajectory_tum.txt, run_log.csv, config.yaml"

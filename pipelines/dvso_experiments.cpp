@@ -74,7 +74,7 @@ ExperimentSetup OpenExperiment(const ExperimentArgs& args) {
   RequireFile(static_cast<int>(setup.gt.size()) >= frames, args.gt,
               "has " + std::to_string(setup.gt.size()) + " poses for " + std::to_string(frames) + " frames");
   setup.predictions = OpenPredictionSource(args.predictions, *setup.sequence);
-  setup.options.dvso.virtual_baseline = setup.predictions.virtual_baseline;
+  ApplyPredictionSource(args.predictions, setup.predictions, &setup.options);
   return setup;
 }
 

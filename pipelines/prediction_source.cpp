@@ -13,7 +13,7 @@ void PredictionSourceArgs::Check() const {
   Require(disparity_left.empty() == disparity_right.empty(), "give both --disparity-left and --disparity-right");
   Require(disparity_left.empty() || model.empty(), "give either --model or --disparity-left/--disparity-right");
   Require(virtual_baseline >= 0, "--virtual-baseline must be > 0");
-  Require(schedule == "speculative" || schedule == "on-demand", "--prediction-schedule must be speculative or on-demand");
+  if (!schedule.empty()) vo::ParsePredictionTiming(schedule);
   Require(threads >= 0, "--inference-threads must be >= 0");
 }
 
@@ -27,9 +27,20 @@ void AddPredictionOptions(CLI::App* cmd, PredictionSourceArgs* args) {
   cmd->add_option("--virtual-baseline", args->virtual_baseline,
                   "dvso: b_v in metres (default: from the model's training camera, or the sequence's baseline for files)");
   cmd->add_option("--prediction-schedule", args->schedule,
-                  "dvso with a model: speculative (every frame on a worker while it is tracked) | on-demand (keyframes only)")
-      ->check(CLI::IsMember({"speculative", "on-demand"}));
-  cmd->add_option("--inference-threads", args->threads, "dvso with a model: inference threads (0 = cores)");
+                  "dvso: keyframe-async (default: a keyframe's prediction runs on a worker while the next frames are "
+                  "tracked) | keyframe-blocking | speculative (every frame predicted while it is tracked)")
+      ->check(CLI::IsMember({"keyframe-async", "keyframe-blocking", "speculative"}));
+  cmd->add_option("--inference-threads", args->threads,
+                  "dvso with a model: LibTorch threads (default 1: fastest beside the odometry on 2 cores; 0 = cores)");
+}
+
+void ApplyPredictionSource(const PredictionSourceArgs& args, const PredictionSource& source,
+                           vo::OdometryOptions* options) {
+  // b_v from the model / files unless the config sets one and no flag overrides it.
+  if (!(options->dvso.virtual_baseline > 0) || args.virtual_baseline > 0) {
+    options->dvso.virtual_baseline = source.virtual_baseline;
+  }
+  if (!args.schedule.empty()) options->dvso.prediction_timing = args.schedule;
 }
 
 std::string ShippedModelPath() {
@@ -70,15 +81,14 @@ PredictionSource OpenPredictionSource(const PredictionSourceArgs& args, const Se
     }
     description << "model " << model << " (" << metadata.input_width << "x" << metadata.input_height
                 << ", trained with baseline " << metadata.baseline << " m, fx/width " << metadata.fx_over_width
-                << "), " << args.schedule << " inference";
-    if (args.schedule == "speculative") {
-      auto worker = std::make_unique<AsyncDisparitySource>(std::move(network));
-      out.worker = worker.get();
-      out.source = std::move(worker);
-    } else {
-      out.source = std::move(network);
-    }
+                << ", " << (args.threads > 0 ? std::to_string(args.threads) : std::string("all")) << " thread(s))";
+    out.source = std::move(network);
   }
+  // Model or files, the work runs on a worker thread so that it can overlap the
+  // odometry (how much depends on dvso.prediction_timing).
+  auto worker = std::make_unique<AsyncDisparitySource>(std::move(out.source));
+  out.worker = worker.get();
+  out.source = std::move(worker);
   description << ", virtual baseline " << out.virtual_baseline << " m";
   out.description = description.str();
   return out;

@@ -11,6 +11,7 @@
 #include "core/disparity_conversion.h"
 #include "core/disparity_source.h"
 #include "core/sequence.h"
+#include "vo/system/odometry_options.h"
 
 namespace dvso::cli {
 
@@ -22,14 +23,14 @@ struct PredictionSourceArgs {
   std::string disparity_left;      // folder of KITTI uint16 PNGs or a .npy stack
   std::string disparity_right;
   double virtual_baseline = 0;     // > 0 overrides b_v
-  std::string schedule = "speculative";  // speculative (predict every frame on a worker while it is tracked) | on-demand
-  int threads = 0;                 // inference threads (0 = cores)
+  std::string schedule;            // "" = the config's dvso.prediction_timing; else keyframe-async | keyframe-blocking | speculative
+  int threads = 1;                 // inference threads; 1 measured fastest next to the odometry on 2 cores (0 = cores)
   void Check() const;
 };
 
 struct PredictionSource {
   std::unique_ptr<DisparitySource> source;  // what the odometry reads (may wrap a worker)
-  AsyncDisparitySource* worker = nullptr;   // the worker wrapper when speculative, else nullptr
+  AsyncDisparitySource* worker = nullptr;   // the worker thread every source runs on
   double virtual_baseline = 0;              // resolved b_v for this sequence's camera
   std::string description;                  // one line for the run header
 };
@@ -46,6 +47,9 @@ std::unique_ptr<DisparitySource> OpenModelDisparitySource(const std::string& pat
 
 // Adds --model, --disparity-left/right, --virtual-baseline, --prediction-schedule,
 // --inference-threads to a subcommand.
+// Applies what the flags say to the odometry options (b_v, prediction timing).
+void ApplyPredictionSource(const PredictionSourceArgs& args, const PredictionSource& source,
+                           vo::OdometryOptions* options);
 void AddPredictionOptions(CLI::App* cmd, PredictionSourceArgs* args);
 
 // Path of the shipped model (source tree), or "" when it is not there.

@@ -5,7 +5,10 @@
 // predictions (NaN, zero, negative) never crashing or producing NaN poses.
 #include <gtest/gtest.h>
 
+#include <atomic>
+#include <chrono>
 #include <cmath>
+#include <thread>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -45,7 +48,7 @@ class OracleSource : public DisparitySource {
   double scale = 1.0;
   bool damage = false;
   bool zero = false;
-  int calls = 0;
+  std::atomic<int> calls{0};  // a worker thread may call Predict
 };
 
 class PointCollector : public OdometryObserver {
@@ -62,7 +65,7 @@ struct DvsoRun {
   std::vector<PointInfo> first_points;
 };
 
-DvsoRun RunDvso(OracleSource* source, OdometryOptions options, int frames = kFrames) {
+DvsoRun RunDvso(DisparitySource* source, OdometryOptions options, int frames = kFrames) {
   const testing::SimulatedSequence& seq = Sequence();
   options.dvso.virtual_baseline = seq.camera.baseline;
   System system(options, seq.camera, OdometryMode::kDvso, source);
@@ -78,6 +81,14 @@ DvsoRun RunDvso(OracleSource* source, OdometryOptions options, int frames = kFra
   r.lost = recorder.CountStatus(FrameStatus::kLost);
   r.first_points = points.first;
   return r;
+}
+
+double MaxTranslationError(const Trajectory& estimate, const testing::SimulatedSequence& seq) {
+  double max_err = 0;
+  for (size_t i = 0; i < seq.truth.size(); ++i) {
+    max_err = std::max(max_err, (estimate.poses[i].T_world_camera.translation() - seq.truth[i].translation()).norm());
+  }
+  return max_err;
 }
 
 TEST(DvsoMode, CapabilitiesOfEachMode) {
@@ -163,13 +174,6 @@ TEST(DvsoMode, LeftRightCheckRemovesInconsistentPixels) {
   EXPECT_GT(count_inconsistent(false), 20);
 }
 
-double MaxTranslationError(const Trajectory& estimate, const testing::SimulatedSequence& seq) {
-  double max_err = 0;
-  for (size_t i = 0; i < seq.truth.size(); ++i) {
-    max_err = std::max(max_err, (estimate.poses[i].T_world_camera.translation() - seq.truth[i].translation()).norm());
-  }
-  return max_err;
-}
 
 TEST(DvsoMode, ExactPredictionsGiveAMetricTrajectoryWithoutAlignment) {
   const testing::SimulatedSequence& seq = Sequence();
@@ -197,6 +201,40 @@ TEST(DvsoMode, DepthInitialisationAloneTracksEveryFrame) {
   const DvsoRun r = RunDvso(&source, options);
   EXPECT_EQ(r.lost, 0);
   EXPECT_NEAR(r.estimate.PathLength() / seq.path_length, 1.0, 0.05);
+}
+
+
+// The oracle behind a worker, taking as long as a small network.
+class SlowOracle : public OracleSource {
+ public:
+  DisparityPair Predict(int index, const cv::Mat& image) override {
+    std::this_thread::sleep_for(std::chrono::milliseconds(40));
+    return OracleSource::Predict(index, image);
+  }
+};
+
+TEST(DvsoMode, EveryPredictionTimingOnAWorkerStaysMetric) {
+  const testing::SimulatedSequence& seq = Sequence();
+  for (const std::string timing : {"keyframe-async", "keyframe-blocking", "speculative"}) {
+    auto slow = std::make_unique<SlowOracle>();
+    const SlowOracle* oracle = slow.get();
+    AsyncDisparitySource worker(std::move(slow));
+    OdometryOptions options;
+    options.dvso.prediction_timing = timing;
+    const DvsoRun r = RunDvso(&worker, options);
+    EXPECT_EQ(r.lost, 0) << timing;
+    const double ratio = r.estimate.PathLength() / seq.path_length;
+    std::cout << timing << ": length ratio " << ratio << ", max error " << MaxTranslationError(r.estimate, seq)
+              << " m, " << oracle->calls << " predictions, " << worker.prefetched_used() << " requested ahead\n";
+    EXPECT_NEAR(ratio, 1.0, 0.01) << timing;
+    EXPECT_LT(MaxTranslationError(r.estimate, seq), 0.01 * seq.path_length) << timing;
+    if (timing == "speculative") {
+      EXPECT_GT(oracle->calls, worker.prefetched_used());  // predicted frames that did not become keyframes
+    } else {
+      EXPECT_LT(oracle->calls, kFrames);  // only keyframes
+    }
+    if (timing == "keyframe-async") EXPECT_GT(worker.prefetched_used(), 5);  // attached after the keyframe was made
+  }
 }
 
 TEST(DvsoMode, TrajectoryScaleFollowsThePredictionScale) {

@@ -28,7 +28,24 @@ ModeCapabilities CapabilitiesOf(OdometryMode mode) {
   return c;
 }
 
+PredictionTiming ParsePredictionTiming(const std::string& text) {
+  if (text == "keyframe-async") return PredictionTiming::kKeyframeAsync;
+  if (text == "keyframe-blocking") return PredictionTiming::kKeyframeBlocking;
+  if (text == "speculative") return PredictionTiming::kSpeculative;
+  throw Error("unknown prediction timing '" + text + "' (expected keyframe-async, keyframe-blocking or speculative)");
+}
+
+std::string ToString(PredictionTiming timing) {
+  switch (timing) {
+    case PredictionTiming::kKeyframeAsync: return "keyframe-async";
+    case PredictionTiming::kKeyframeBlocking: return "keyframe-blocking";
+    case PredictionTiming::kSpeculative: return "speculative";
+  }
+  return "unknown";
+}
+
 void DvsoOptions::Check() const {
+  ParsePredictionTiming(prediction_timing);
   Require(virtual_baseline >= 0, "dvso virtual_baseline must be >= 0 (0 = from the model)");
   Require(left_right_threshold > 0, "dvso left_right_threshold must be > 0");
   Require(init_relative_range > 0 && init_relative_range < 1, "dvso init_relative_range must be in (0, 1)");

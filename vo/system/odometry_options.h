@@ -33,6 +33,16 @@ struct ModeCapabilities {
 };
 ModeCapabilities CapabilitiesOf(OdometryMode mode);
 
+// When a keyframe's prediction is computed (DVSO with a source that has a worker).
+enum class PredictionTiming {
+  kKeyframeAsync,     // requested when the frame becomes a keyframe; attached (D^R, candidates) when it arrives,
+                      // while the next frames are tracked: inference overlaps the odometry
+  kKeyframeBlocking,  // requested and waited for when the frame becomes a keyframe
+  kSpeculative,       // every frame is requested while it is tracked; a keyframe waits for its own
+};
+PredictionTiming ParsePredictionTiming(const std::string& text);  // "keyframe-async" | "keyframe-blocking" | "speculative"
+std::string ToString(PredictionTiming timing);
+
 // DVSO-specific options (paper section 4). The virtual stereo term itself is
 // configured in WindowOptions (use_virtual_stereo, virtual_stereo_weight =
 // lambda); its baseline is set from virtual_baseline below.
@@ -41,6 +51,7 @@ struct DvsoOptions {
   bool left_right_check = true;        // paper "lr": pixels with e_lr > threshold are not selected
   double left_right_threshold = 1.0;   // e_lr threshold (pixels, paper: 1)
   double init_relative_range = 0.25;   // candidates search the inverse depth in d_pred * [1 - r, 1 + r] (epipolar refinement)
+  std::string prediction_timing = "keyframe-async";  // keyframe-async | keyframe-blocking | speculative (PredictionTiming)
   void Check() const;
 };
 

@@ -109,6 +109,7 @@ void VisitFields(Options& o, Visitor&& v) {
   v("dvso", "left_right_check", o.dvso.left_right_check);
   v("dvso", "left_right_threshold", o.dvso.left_right_threshold);
   v("dvso", "init_relative_range", o.dvso.init_relative_range);
+  v("dvso", "prediction_timing", o.dvso.prediction_timing);
 }
 
 OdometryOptions FromSection(YamlSection& root, const OdometryOptions& base) {

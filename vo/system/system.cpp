@@ -35,6 +35,7 @@ System::System(const OdometryOptions& options, const StereoCamera& camera, Odome
       mode_(mode),
       capabilities_(CapabilitiesOf(mode)),
       predictions_(predictions),
+      prediction_timing_(ParsePredictionTiming(options.dvso.prediction_timing)),
       tracker_(options.tracker) {
   options_.Check();
   camera_.left.Check();
@@ -76,9 +77,14 @@ FrameEvent System::ProcessFrame(int frame_index, double timestamp, const cv::Mat
   }
   const auto start = std::chrono::steady_clock::now();
   current_left_image_ = left;
-  // A source with a worker starts on this frame while it is tracked; only a
-  // keyframe asks for the result (FetchPrediction).
-  if (capabilities_.has_predictions) predictions_->Prefetch(frame_index, left);
+  if (capabilities_.has_predictions) {
+    // Speculative: a source with a worker starts on this frame while it is
+    // tracked; only a keyframe asks for the result.
+    if (prediction_timing_ == PredictionTiming::kSpeculative) predictions_->Prefetch(frame_index, left);
+    // Keyframe-async: the last keyframe's prediction may have arrived; its
+    // candidates are then traced from this frame on.
+    if (initialized_) AttachPendingPrediction(/*wait=*/false);
+  }
   FrameEvent ev;
   ev.frame_index = frame_index;
   ev.timestamp = timestamp;
@@ -188,9 +194,8 @@ void System::TrackFrame(int frame_index, const ImagePyramidPtr& pyr, const cv::M
   }
 }
 
-System::KeyframePrediction System::FetchPrediction(int frame_index) {
-  Require(!current_left_image_.empty(), "System: no image for the prediction of frame " + std::to_string(frame_index));
-  DisparityPair pair = predictions_->Predict(frame_index, current_left_image_);
+System::KeyframePrediction System::FetchPrediction(int frame_index, const cv::Mat& image) {
+  DisparityPair pair = predictions_->Predict(frame_index, image);
   const auto check = [&](const cv::Mat& map, const char* which) {
     Require(map.type() == CV_32FC1 && map.cols == camera_.left.width && map.rows == camera_.left.height,
             std::string("disparity source: ") + which + " map of frame " + std::to_string(frame_index) +
@@ -200,6 +205,19 @@ System::KeyframePrediction System::FetchPrediction(int frame_index) {
   check(pair.right, "right");
   // NaN / zero / negative predictions become "no depth here".
   return KeyframePrediction{SanitizeDisparity(pair.left), SanitizeDisparity(pair.right)};
+}
+
+void System::AttachPendingPrediction(bool wait) {
+  if (pending_prediction_id_ < 0) return;
+  const int id = pending_prediction_id_;
+  if (!wait && !predictions_->IsReady(id)) return;
+  pending_prediction_id_ = -1;
+  // The request (with its image) was made when the keyframe was created.
+  const KeyframePrediction prediction = FetchPrediction(id, cv::Mat());
+  const Keyframe* keyframe = window_ ? window_->FindKeyframe(id) : nullptr;
+  if (keyframe == nullptr) return;  // already marginalised: nothing to attach to
+  window_->SetRightDisparity(id, prediction.right);
+  AddCandidates(id, *keyframe->left, nullptr, &prediction, /*converged=*/false);
 }
 
 void System::InitializeMetric(int frame_index, const ImagePyramidPtr& left, const cv::Mat& right,
@@ -213,7 +231,7 @@ void System::InitializeMetric(int frame_index, const ImagePyramidPtr& left, cons
   KeyframePrediction prediction;
   if (capabilities_.has_right_image) input.right = MakePyramid(right);
   if (capabilities_.has_predictions) {
-    prediction = FetchPrediction(frame_index);
+    prediction = FetchPrediction(frame_index, current_left_image_);  // a new map needs its depths now
     input.right_disparity = prediction.right;
   }
   window_->AddKeyframe(input);
@@ -280,6 +298,7 @@ void System::ResetAfterLoss(int frame_index, const Eigen::Isometry3d& predicted)
   candidates_.clear();
   tracker_ = CoarseTracker(options_.tracker);
   mono_init_.reset();
+  pending_prediction_id_ = -1;  // its keyframe is gone
   initialized_ = false;
   ++segment_;
   reference_id_ = -1;

@@ -60,7 +60,10 @@ class System {
   };
 
   ImagePyramidPtr MakePyramid(const cv::Mat& image) const;
-  KeyframePrediction FetchPrediction(int frame_index);
+  KeyframePrediction FetchPrediction(int frame_index, const cv::Mat& image);
+  // Keyframe-async timing: when the prediction of the pending keyframe has
+  // arrived (or `wait`), attaches its D^R and creates its candidates from D^L.
+  void AttachPendingPrediction(bool wait);
   // Starts a map at this frame with metric depth: static stereo matches of
   // the right image (Stereo DSO) or predicted depths (DVSO).
   void InitializeMetric(int frame_index, const ImagePyramidPtr& left, const cv::Mat& right,
@@ -95,6 +98,8 @@ class System {
   OdometryMode mode_;
   ModeCapabilities capabilities_;
   DisparitySource* predictions_ = nullptr;
+  PredictionTiming prediction_timing_ = PredictionTiming::kKeyframeAsync;
+  int pending_prediction_id_ = -1;  // keyframe whose prediction is still being computed (-1 = none)
   cv::Mat current_left_image_;   // the frame being processed (predictions are asked for it)
   int virtual_stereo_residuals_ = 0;
   double virtual_stereo_energy_ = 0;

@@ -34,7 +34,23 @@ void System::MakeKeyframe(int frame_index, const ImagePyramidPtr& left, const cv
   ImagePyramidPtr right_pyr;
   if (capabilities_.has_right_image && !right.empty()) right_pyr = MakePyramid(right);
   KeyframePrediction prediction;
-  if (capabilities_.has_predictions) prediction = FetchPrediction(frame_index);
+  bool have_prediction = false;
+  if (capabilities_.has_predictions) {
+    if (prediction_timing_ == PredictionTiming::kKeyframeAsync) {
+      // At most one prediction outstanding: the previous keyframe's comes first.
+      AttachPendingPrediction(/*wait=*/true);
+      predictions_->Prefetch(frame_index, current_left_image_);
+      if (predictions_->IsReady(frame_index)) {
+        prediction = FetchPrediction(frame_index, current_left_image_);
+        have_prediction = true;
+      } else {
+        pending_prediction_id_ = frame_index;  // D^R and candidates follow when it arrives
+      }
+    } else {
+      prediction = FetchPrediction(frame_index, current_left_image_);
+      have_prediction = true;
+    }
+  }
   KeyframeInput input;
   input.id = frame_index;
   input.world_to_camera = T_cw;
@@ -47,8 +63,9 @@ void System::MakeKeyframe(int frame_index, const ImagePyramidPtr& left, const cv
   ActivateCandidates(frame_index, /*include_new_keyframe=*/false);
   RunOptimization(event);
   MarginalizeKeyframes();
-  AddCandidates(frame_index, *left, right_pyr.get(), capabilities_.has_predictions ? &prediction : nullptr,
-                /*converged=*/false);
+  if (!capabilities_.has_predictions || have_prediction) {
+    AddCandidates(frame_index, *left, right_pyr.get(), have_prediction ? &prediction : nullptr, /*converged=*/false);
+  }
   ++num_keyframes_total_;
   SetTrackingReference(frame_index);
   EmitWindowEvent(frame_index);
