@@ -7,21 +7,22 @@
 #   mono                     DSO, Sim(3)-aligned (scale is arbitrary)
 #   stereo                   Stereo DSO (the reference accuracy)
 #   dvso-oracle              predictions = the simulator's exact disparities (disp_0/ disp_1/)
-#   dvso-model               the shipped model (or $MODEL) run online, speculative worker
-#   dvso-model-ondemand      the same, inference only when a keyframe asks for it
+#   dvso-model               the shipped model (or $MODEL) run online, keyframe-async (default timing)
+#   dvso-model-blocking      the same, each keyframe waits for its prediction
+#   dvso-model-speculative   the same, every frame predicted while it is tracked
 # Columns: t_rel % and r_rel deg/100 m (KITTI protocol; unaligned except mono), Sim(3)
 # scale, lost frames, wall ms/frame of the whole loop (incl. image reading and
 # waiting for the network), its ratio to mono, CPU ms/frame (user+sys) and max RSS.
 #
 #   benchmarks/run_dvso.sh SEQUENCE_DIR... [-- extra dvso odometry options]
 #   env: DVSO=path/to/dvso (default build/dvso), OUT=work dir (default /tmp/dvso_bench),
-#        MODEL=model.pt (default: the shipped one), VARIANTS="mono stereo dvso-oracle dvso-model dvso-model-ondemand"
+#        MODEL=model.pt (default: the shipped one), VARIANTS="mono stereo dvso-oracle dvso-model ..."
 set -euo pipefail
 
 REPO=$(cd "$(dirname "$0")/.." && pwd)
 DVSO="${DVSO:-$REPO/build/dvso}"
 OUT="${OUT:-/tmp/dvso_bench}"
-VARIANTS="${VARIANTS:-mono stereo dvso-oracle dvso-model dvso-model-ondemand}"
+VARIANTS="${VARIANTS:-mono stereo dvso-oracle dvso-model dvso-model-blocking dvso-model-speculative}"
 SEQS=()
 while [[ $# -gt 0 && "$1" != "--" ]]; do SEQS+=("$1"); shift; done
 [[ $# -gt 0 ]] && shift
@@ -47,8 +48,9 @@ for seq in "${SEQS[@]}"; do
       mono) args=(--mode mono) ;;
       stereo) args=(--mode stereo) ;;
       dvso-oracle) args=(--mode dvso --disparity-left "$seq/disp_0" --disparity-right "$seq/disp_1") ;;
-      dvso-model) args=(--mode dvso "${MODEL_ARGS[@]}" --prediction-schedule speculative) ;;
-      dvso-model-ondemand) args=(--mode dvso "${MODEL_ARGS[@]}" --prediction-schedule on-demand) ;;
+      dvso-model) args=(--mode dvso "${MODEL_ARGS[@]}" --prediction-schedule keyframe-async) ;;
+      dvso-model-blocking) args=(--mode dvso "${MODEL_ARGS[@]}" --prediction-schedule keyframe-blocking) ;;
+      dvso-model-speculative) args=(--mode dvso "${MODEL_ARGS[@]}" --prediction-schedule speculative) ;;
       *) echo "error: unknown variant $variant" >&2; exit 1 ;;
     esac
     /usr/bin/env time -f "%U %S %M" -o "$run.time" "$DVSO" odometry --sequence "$seq" --out "$run" --no-progress \
