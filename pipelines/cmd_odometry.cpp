@@ -1,6 +1,7 @@
 // `dvso odometry`: direct sparse odometry (mono / stereo / dvso) over a sequence.
 // Thin: parses options, loads and prints the config, calls
 // vo::RunOdometryOnSequence (vo/system/sequence_runner.h).
+#include <cstdlib>
 #include <iostream>
 #include <memory>
 
@@ -21,6 +22,7 @@ struct OdometryArgs {
   int count = -1;
   bool ply = false;
   bool no_progress = false;
+  bool strict = false;
   PredictionSourceArgs predictions;
 };
 
@@ -54,9 +56,11 @@ void Run(const OdometryArgs& args) {
   run.write_ply = args.ply;
   run.progress = !args.no_progress;
   run.predictions = predictions.source.get();
+  run.strict = args.strict;
+  run.stop_on_interrupt = true;
   const vo::SequenceRunSummary s = vo::RunOdometryOnSequence(*sequence, options, mode, args.out, run);
-  std::cout << "frames " << s.frames << ", keyframes " << s.keyframes << ", lost " << s.lost << ", initializing "
-            << s.initializing << ", re-initialisations " << s.resets << "\n"
+  std::cout << "frames " << s.frames << ", keyframes " << s.keyframes << ", lost " << s.lost << " (unreadable "
+            << s.unreadable << "), initializing " << s.initializing << ", re-initialisations " << s.resets << "\n"
             << "mean " << s.mean_ms << " ms/frame (max " << s.max_ms << " ms), wall " << s.wall_ms
             << " ms/frame incl. reading\n";
   if (predictions.worker != nullptr) {
@@ -64,6 +68,11 @@ void Run(const OdometryArgs& args) {
               << " requested ahead, " << predictions.worker->computed_on_demand() << " computed on demand\n";
   }
   if (args.ply) std::cout << "points.ply: " << s.ply_points << " points\n";
+  if (s.interrupted) {
+    std::cout << "interrupted: outputs hold the " << s.frames << " frames processed (marker " << args.out
+              << "/INTERRUPTED)" << std::endl;
+    std::exit(130);  // the conventional exit status after SIGINT
+  }
   std::cout << "written: " << args.out << "/trajectory.txt, trajectory_tum.txt, run_log.csv, config.yaml"
             << (args.ply ? ", points.ply" : "") << "\n";
 }
@@ -88,6 +97,8 @@ void AddOdometryCommand(CLI::App& app) {
   cmd->add_option("--camera", args->camera_file, "DSO camera file (image-folder sequences only)");
   cmd->add_flag("--ply", args->ply, "Also write points.ply (marginalised points)");
   cmd->add_flag("--no-progress", args->no_progress, "No progress bar");
+  cmd->add_flag("--strict", args->strict,
+                "Stop at the first unreadable image (default: warn, count it as a lost frame, go on)");
   cmd->callback([args] { Run(*args); });
 }
 

@@ -5,12 +5,14 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 
 #include "core/alignment.h"
 #include "core/simulator.h"
+#include "tests/dvso_cli_runner.h"
 #include "tests/vo/simulated_sequence.h"
 #include "core/trajectory.h"
 #include "vo/system/output_writers.h"
@@ -140,6 +142,71 @@ TEST(SystemSimulated, CliWritesEveryOutput) {
   const std::string bad = bin + " odometry --sequence " + seq_dir + " --config " + dir + "/bad.yaml --out " + dir +
                           "/bad > /dev/null 2>&1";
   EXPECT_NE(std::system(bad.c_str()), 0);
+}
+
+}  // namespace
+}  // namespace dvso::vo
+
+namespace dvso::vo {
+namespace {
+
+TEST(SystemSimulated, DamagedFrameIsCountedAsLostAndTheRunGoesOnUnlessStrict) {
+  const std::string dir = ::testing::TempDir() + "/dvso_damaged";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  const std::string seq = dir + "/seq";
+  ASSERT_EQ(dvso::testing::RunDvso("simulate --quiet --out " + seq +
+                                   " --count 14 --width 320 --height 96 --texture-size 128").exit_code, 0);
+  std::ofstream(seq + "/image_0/000007.png") << "not a png any more";
+  const auto run = dvso::testing::RunDvso("odometry --mode stereo --preset fast --no-progress --sequence " + seq +
+                                          " --out " + dir + "/out");
+  ASSERT_EQ(run.exit_code, 0) << run.out;
+  EXPECT_NE(run.out.find("warning: frame 7 skipped"), std::string::npos) << run.out;
+  EXPECT_NE(run.out.find("(unreadable 1)"), std::string::npos) << run.out;
+  EXPECT_EQ(ReadTrajectory(dir + "/out/trajectory.txt", TrajectoryFormat::kKitti).size(), 14u);
+  std::ifstream log(dir + "/out/run_log.csv");
+  int unreadable = 0, tracked_after = 0;
+  for (std::string line; std::getline(log, line);) {
+    if (line.find(",unreadable,") != std::string::npos) ++unreadable;
+    const bool is_frame = !line.empty() && std::isdigit(static_cast<unsigned char>(line[0]));
+    if (is_frame && std::stoi(line) >= 10 && line.find(",lost,") == std::string::npos) ++tracked_after;
+  }
+  EXPECT_EQ(unreadable, 1);
+  EXPECT_EQ(tracked_after, 4);  // tracking went on after the damaged frame
+  const auto strict = dvso::testing::RunDvso("odometry --mode stereo --preset fast --no-progress --strict --sequence " +
+                                             seq + " --out " + dir + "/strict");
+  EXPECT_EQ(strict.exit_code, 1);
+  EXPECT_NE(strict.out.find("000007.png"), std::string::npos) << strict.out;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/strict/trajectory.txt"));
+}
+
+TEST(SystemSimulated, InterruptWritesTheFramesProcessedAndAMarker) {
+  const std::string dir = ::testing::TempDir() + "/dvso_interrupt";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  const std::string seq = dir + "/seq";
+  ASSERT_EQ(dvso::testing::RunDvso("simulate --quiet --out " + seq +
+                                   " --count 150 --width 320 --height 96 --texture-size 128").exit_code, 0);
+  // Start, wait until frames are being processed, send SIGINT, collect the exit status.
+  const std::string out = dir + "/out";
+  const std::string script = "(" + std::string(DVSO_BINARY) + " odometry --mode mono --no-progress --sequence " + seq +
+                             " --out " + out + " > " + dir + "/log.txt 2>&1 & pid=$!; " +
+                             "for i in $(seq 200); do [ -f " + out + "/run_log.csv.partial ] && break; sleep 0.02; done; " +
+                             "sleep 0.3; kill -INT $pid; wait $pid; echo $? > " + dir + "/status.txt)";
+  ASSERT_EQ(std::system(("bash -c '" + script + "'").c_str()), 0);
+  std::ifstream status_file(dir + "/status.txt");
+  int status = -1;
+  status_file >> status;
+  if (status == 0) GTEST_SKIP() << "the run finished before the signal (machine too fast for this check)";
+  EXPECT_EQ(status, 130);
+  ASSERT_TRUE(std::filesystem::exists(out + "/INTERRUPTED"));
+  const Trajectory partial = ReadTrajectory(out + "/trajectory.txt", TrajectoryFormat::kKitti);
+  EXPECT_GT(partial.size(), 0u);
+  EXPECT_LT(partial.size(), 150u);
+  std::ifstream log(out + "/run_log.csv");
+  int lines = 0;
+  for (std::string line; std::getline(log, line);) ++lines;
+  EXPECT_EQ(lines, static_cast<int>(partial.size()) + 1);  // complete files for the frames processed
 }
 
 }  // namespace

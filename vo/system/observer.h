@@ -16,6 +16,7 @@ enum class FrameStatus {
   kKeyframe,      // tracked (or initialised) and made a keyframe
   kInitializing,  // waiting for (mono) initialisation: pose is a placeholder
   kLost,          // tracking failed: pose is the best available prediction
+  kUnreadable,    // the image could not be read: not processed, pose is the last one (a lost frame)
 };
 std::string ToString(FrameStatus status);
 

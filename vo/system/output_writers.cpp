@@ -2,11 +2,23 @@
 
 #include <cstdio>
 #include <iomanip>
+#include <unistd.h>
 
 #include "core/error.h"
 #include "core/fs_util.h"
 
 namespace dvso::vo {
+
+namespace {
+// Resident set size of this process (Linux /proc/self/statm; 0 elsewhere), so
+// that a run log shows whether memory stays flat over a long sequence.
+double ResidentSetMegabytes() {
+  std::ifstream statm("/proc/self/statm");
+  long pages_total = 0, pages_resident = 0;
+  if (!(statm >> pages_total >> pages_resident)) return 0.0;
+  return static_cast<double>(pages_resident) * static_cast<double>(sysconf(_SC_PAGESIZE)) / (1024.0 * 1024.0);
+}
+}  // namespace
 
 void TrajectoryRecorder::OnFrameTracked(const FrameEvent& e) {
   Record r;
@@ -60,7 +72,7 @@ RunLogWriter::RunLogWriter(const std::string& csv_path)
   RequireFile(out_.good(), partial_path_, "cannot write run log");
   out_ << "frame,timestamp,status,segment,reference,track_ms,optimize_ms,total_ms,rmse,hypotheses,"
           "window_keyframes,active_points,immature_points,keyframe_score,rmse_ratio,"
-          "virtual_stereo_residuals,virtual_stereo_energy\n";
+          "virtual_stereo_residuals,virtual_stereo_energy,rss_mb\n";
 }
 
 RunLogWriter::~RunLogWriter() {
@@ -76,7 +88,8 @@ void RunLogWriter::OnFrameTracked(const FrameEvent& e) {
        << e.segment << ',' << e.reference_frame_index << ',' << std::setprecision(6) << e.track_ms << ','
        << e.optimize_ms << ',' << e.total_ms << ',' << e.tracking_rmse << ',' << e.hypotheses_tried << ','
        << e.window_keyframes << ',' << e.active_points << ',' << e.immature_points << ',' << e.keyframe_score << ','
-       << e.rmse_ratio << ',' << e.virtual_stereo_residuals << ',' << e.virtual_stereo_energy << '\n';
+       << e.rmse_ratio << ',' << e.virtual_stereo_residuals << ',' << e.virtual_stereo_energy << ','
+       << std::setprecision(4) << ResidentSetMegabytes() << '\n';
 }
 
 void RunLogWriter::OnFinished() {

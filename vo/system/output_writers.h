@@ -3,7 +3,7 @@
 //    final (marginalised) keyframe poses: T_world_frame = T_world_ref * T_ref_frame,
 //    so refinements of keyframes by the window reach the non-keyframes too.
 //    Keeps one small record per frame (memory O(frames) * ~150 bytes).
-//  - RunLogWriter: one CSV line per frame (status, timings, window sizes),
+//  - RunLogWriter: one CSV line per frame (status, timings, window sizes, RSS),
 //    streamed to disk.
 //  - PlyPointWriter: marginalised points streamed to a temporary file,
 //    assembled into a binary-free ASCII PLY at the end.

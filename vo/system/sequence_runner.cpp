@@ -1,6 +1,10 @@
 #include "vo/system/sequence_runner.h"
 
 #include <algorithm>
+#include <csignal>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
 #include <chrono>
 #include <memory>
 #include <sstream>
@@ -13,6 +17,34 @@
 #include "vo/system/system.h"
 
 namespace dvso::vo {
+
+namespace {
+// Set by SIGINT / SIGTERM while a run that asked for it is in progress.
+volatile std::sig_atomic_t g_interrupt_requested = 0;
+extern "C" void RequestInterrupt(int) { g_interrupt_requested = 1; }
+
+// Installs the handlers for the lifetime of a run and restores the old ones.
+class InterruptScope {
+ public:
+  explicit InterruptScope(bool active) : active_(active) {
+    if (!active_) return;
+    g_interrupt_requested = 0;
+    old_int_ = std::signal(SIGINT, RequestInterrupt);
+    old_term_ = std::signal(SIGTERM, RequestInterrupt);
+  }
+  ~InterruptScope() {
+    if (!active_) return;
+    std::signal(SIGINT, old_int_);
+    std::signal(SIGTERM, old_term_);
+  }
+  bool requested() const { return active_ && g_interrupt_requested != 0; }
+
+ private:
+  bool active_;
+  void (*old_int_)(int) = SIG_DFL;
+  void (*old_term_)(int) = SIG_DFL;
+};
+}  // namespace
 
 void SequenceRunOptions::Check() const {
   Require(first >= 0, "--first must be >= 0");
@@ -51,9 +83,26 @@ SequenceRunSummary RunOdometryOnSequence(const SequenceReader& sequence, const O
   read.load_right = capabilities.has_right_image;  // DVSO is monocular: an existing right image is not read
   double total_ms = 0;
   const auto loop_start = std::chrono::steady_clock::now();
+  const InterruptScope interrupt(run.stop_on_interrupt);
+  std::filesystem::remove(JoinPath(out_dir, "INTERRUPTED"));
   for (int i = run.first; i < end; ++i) {
-    const StereoFrame frame = sequence.Read(i, read);
-    const FrameEvent ev = system.ProcessFrame(i, frame.timestamp, frame.left, frame.right);
+    if (interrupt.requested()) {
+      summary.interrupted = true;
+      break;
+    }
+    StereoFrame frame;
+    FrameEvent ev;
+    try {
+      frame = sequence.Read(i, read);
+    } catch (const Error& e) {
+      if (run.strict) throw;
+      // A damaged image must not throw away the run before it: warn, count, go on.
+      std::cerr << "\ndvso: warning: frame " << i << " skipped (counted as lost): " << e.what() << std::endl;
+      ++summary.unreadable;
+      const double t = i < static_cast<int>(sequence.timestamps().size()) ? sequence.timestamps()[i] : 0.0;
+      ev = system.ReportUnreadableFrame(i, t);
+    }
+    if (ev.status != FrameStatus::kUnreadable) ev = system.ProcessFrame(i, frame.timestamp, frame.left, frame.right);
     total_ms += ev.total_ms;
     summary.max_ms = std::max(summary.max_ms, ev.total_ms);
     ++summary.frames;
@@ -74,8 +123,14 @@ SequenceRunSummary RunOdometryOnSequence(const SequenceReader& sequence, const O
   WriteTumTrajectory(JoinPath(out_dir, "trajectory_tum.txt"), trajectory);
   // Written last: a run that failed leaves neither log nor config behind.
   SaveOdometryOptions(JoinPath(out_dir, "config.yaml"), system.options());
+  if (summary.interrupted) {
+    WriteAtomically(JoinPath(out_dir, "INTERRUPTED"), [&](const std::string& temp) {
+      std::ofstream(temp) << "interrupted after " << summary.frames << " of " << end - run.first
+                          << " frames; trajectory.txt, trajectory_tum.txt and run_log.csv hold those frames\n";
+    });
+  }
   summary.keyframes = system.num_keyframes_total();
-  summary.lost = recorder.CountStatus(FrameStatus::kLost);
+  summary.lost = recorder.CountStatus(FrameStatus::kLost) + recorder.CountStatus(FrameStatus::kUnreadable);
   summary.initializing = recorder.CountStatus(FrameStatus::kInitializing);
   summary.resets = system.num_resets();
   summary.mean_ms = summary.frames > 0 ? total_ms / summary.frames : 0;

@@ -5,6 +5,8 @@
 //   run_log.csv         per frame: status, timings, window sizes, virtual stereo residuals
 //   points.ply          marginalised points (optional)
 //   config.yaml         the options used
+//   INTERRUPTED         only when the run was stopped by SIGINT/SIGTERM: the
+//                       other files then hold the frames processed until then
 #pragma once
 
 #include <string>
@@ -24,6 +26,8 @@ struct SequenceRunOptions {
   bool progress = true;       // progress bar on stderr
   std::vector<OdometryObserver*> extra_observers;  // non-owning, e.g. the label writer of sdso_labels
   DisparitySource* predictions = nullptr;          // non-owning; required by modes with predictions (DVSO)
+  bool strict = false;        // an unreadable image stops the run with its error (default: warn, count, go on)
+  bool stop_on_interrupt = false;  // SIGINT / SIGTERM end the run after the current frame; outputs are written
   void Check() const;
 };
 
@@ -33,6 +37,8 @@ struct SequenceRunSummary {
   int lost = 0;               // frames reported lost
   int initializing = 0;       // frames before (re-)initialisation finished
   int resets = 0;             // re-initialisations after a loss
+  int unreadable = 0;         // frames whose image could not be read (counted as lost)
+  bool interrupted = false;   // stopped by SIGINT / SIGTERM before the last frame
   double mean_ms = 0;         // mean total time per frame (excl. image loading)
   double wall_ms = 0;         // wall time per frame of the whole loop (incl. image loading)
   double max_ms = 0;

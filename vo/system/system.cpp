@@ -24,6 +24,7 @@ std::string ToString(FrameStatus status) {
     case FrameStatus::kKeyframe: return "keyframe";
     case FrameStatus::kInitializing: return "initializing";
     case FrameStatus::kLost: return "lost";
+    case FrameStatus::kUnreadable: return "unreadable";
   }
   return "unknown";
 }
@@ -123,6 +124,22 @@ FrameEvent System::ProcessFrame(int frame_index, double timestamp, const cv::Mat
   ev.virtual_stereo_energy = virtual_stereo_energy_;
   current_left_image_.release();
   last_T_world_camera_ = ev.T_world_camera;
+  for (OdometryObserver* o : observers_) o->OnFrameTracked(ev);
+  return ev;
+}
+
+FrameEvent System::ReportUnreadableFrame(int frame_index, double timestamp) {
+  Require(!finished_, "System::ReportUnreadableFrame after Finish");
+  FrameEvent ev;
+  ev.frame_index = frame_index;
+  ev.timestamp = timestamp;
+  ev.status = FrameStatus::kUnreadable;
+  ev.segment = segment_;
+  ev.T_world_camera = last_T_world_camera_;  // nothing better is known; tracking goes on from the next frame
+  if (window_) {
+    ev.window_keyframes = window_->num_keyframes();
+    ev.active_points = window_->num_points();
+  }
   for (OdometryObserver* o : observers_) o->OnFrameTracked(ev);
   return ev;
 }

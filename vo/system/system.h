@@ -40,6 +40,11 @@ class System {
   // order. Returns the event sent to observers.
   FrameEvent ProcessFrame(int frame_index, double timestamp, const cv::Mat& left, const cv::Mat& right = cv::Mat());
 
+  // Reports a frame whose image could not be read (a damaged file in a long
+  // run): observers get a kUnreadable event with the last pose, so outputs
+  // keep one line per input frame; the odometry state is untouched.
+  FrameEvent ReportUnreadableFrame(int frame_index, double timestamp);
+
   // Marginalises what is left (reports final keyframe poses and points) and
   // calls OnFinished. Idempotent.
   void Finish();
