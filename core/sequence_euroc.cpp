@@ -88,6 +88,18 @@ EurocCamera ReadEurocCamera(const std::string& cam_dir) {
   return cam;
 }
 
+// Intrinsics from the upper-left 3x3 of a camera or projection matrix (CV_64F).
+PinholeCamera PinholeFromMatrix(const cv::Mat& K, const cv::Size& size) {
+  PinholeCamera c;
+  c.fx = K.at<double>(0, 0);
+  c.fy = K.at<double>(1, 1);
+  c.cx = K.at<double>(0, 2);
+  c.cy = K.at<double>(1, 2);
+  c.width = size.width;
+  c.height = size.height;
+  return c;
+}
+
 class EurocSequence : public SequenceReader {
  public:
   explicit EurocSequence(const std::string& root) : root_(root) {
@@ -125,12 +137,7 @@ class EurocSequence : public SequenceReader {
                       cv::CALIB_ZERO_DISPARITY, 0.0, cam0.size);
     cv::initUndistortRectifyMap(cam0.K, cam0.distortion, R1, P1, cam0.size, CV_32FC1, map0x_, map0y_);
     cv::initUndistortRectifyMap(cam1.K, cam1.distortion, R2, P2, cam1.size, CV_32FC1, map1x_, map1y_);
-    camera_.left.fx = P1.at<double>(0, 0);
-    camera_.left.fy = P1.at<double>(1, 1);
-    camera_.left.cx = P1.at<double>(0, 2);
-    camera_.left.cy = P1.at<double>(1, 2);
-    camera_.left.width = cam0.size.width;
-    camera_.left.height = cam0.size.height;
+    camera_.left = PinholeFromMatrix(P1, cam0.size);
     camera_.baseline = -P2.at<double>(0, 3) / P2.at<double>(0, 0);
     RequireFile(camera_.baseline > 0, mav, "cam1 is not to the right of cam0 after rectification");
     size0_ = cam0.size;
@@ -172,12 +179,7 @@ class EurocSequence : public SequenceReader {
                           ? cv::Mat(cam0.K.clone())
                           : cv::getOptimalNewCameraMatrix(cam0.K, cam0.distortion, cam0.size, 0.0, cam0.size);
     cv::initUndistortRectifyMap(cam0.K, cam0.distortion, cv::Mat(), K, cam0.size, CV_32FC1, map0x_, map0y_);
-    camera_.left.fx = K.at<double>(0, 0);
-    camera_.left.fy = K.at<double>(1, 1);
-    camera_.left.cx = K.at<double>(0, 2);
-    camera_.left.cy = K.at<double>(1, 2);
-    camera_.left.width = cam0.size.width;
-    camera_.left.height = cam0.size.height;
+    camera_.left = PinholeFromMatrix(K, cam0.size);
     camera_.baseline = 0;
   }
 

@@ -4,7 +4,10 @@
 
 #include <sys/wait.h>
 
+#include <gtest/gtest.h>
+
 #include <array>
+#include <filesystem>
 #include <cstdio>
 #include <string>
 
@@ -27,6 +30,18 @@ inline CliRun RunDvso(const std::string& args, bool merge_stderr = true) {
   const int status = ::pclose(pipe);
   run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return run;
+}
+
+// Makes a fresh folder `name` under the test temp dir and simulates `frames`
+// small frames (320x96) into <folder>/seq with `dvso simulate`. Returns the
+// folder ("" when the simulation failed).
+inline std::string FreshSimulatedSequence(const std::string& name, int frames) {
+  const std::string dir = ::testing::TempDir() + "/" + name;
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  const CliRun sim = RunDvso("simulate --quiet --out " + dir + "/seq --count " + std::to_string(frames) +
+                             " --width 320 --height 96 --texture-size 128");
+  return sim.exit_code == 0 ? dir : "";
 }
 
 }  // namespace dvso::testing

@@ -234,15 +234,5 @@ TEST(BackendJacobians, VirtualStereoJacobianMatchesFiniteDifferences) {
   }
 }
 
-TEST(BackendJacobians, HuberWeightsAndEnergy) {
-  float w, e;
-  HuberWeightAndEnergy(3.0f, 9.0f, &w, &e);
-  EXPECT_FLOAT_EQ(w, 1.0f);
-  EXPECT_FLOAT_EQ(e, 9.0f);
-  HuberWeightAndEnergy(-18.0f, 9.0f, &w, &e);
-  EXPECT_FLOAT_EQ(w, 0.5f);
-  EXPECT_FLOAT_EQ(e, 2 * 9 * 18 - 81);  // 2 gamma |r| - gamma^2, continuous at |r| = gamma
-}
-
 }  // namespace
 }  // namespace dvso::vo

@@ -16,8 +16,8 @@ TEST(PhotometricKernel, HuberAndGradientWeightByHand) {
   EXPECT_FLOAT_EQ(e, 9.0f);
   HuberWeightAndEnergy(-18.0f, 9.0f, &w, &e);
   EXPECT_FLOAT_EQ(w, 0.5f);
-  EXPECT_FLOAT_EQ(e, 2 * 9 * 18 - 81);
-  EXPECT_FLOAT_EQ(HuberEnergy(9.0f, 9.0f), 81.0f);  // continuous at the threshold
+  EXPECT_FLOAT_EQ(e, 2 * 9 * 18 - 81);  // 2 gamma |r| - gamma^2
+  EXPECT_FLOAT_EQ(HuberEnergy(9.0f, 9.0f), 81.0f);  // continuous at |r| = gamma
   EXPECT_FLOAT_EQ(GradientWeight(2500.0f, 30.0f, 40.0f), 2500.0f / (2500.0f + 2500.0f));
 }
 

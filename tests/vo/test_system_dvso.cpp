@@ -285,12 +285,9 @@ std::string ReadText(const std::string& path) {
 }
 
 TEST(DvsoCli, RunsOnDisparityFilesAndRejectsBadInputWithOneLineNothingWritten) {
-  const std::string dir = ::testing::TempDir() + "/dvso_mode_cli";
-  std::filesystem::remove_all(dir);
-  std::filesystem::create_directories(dir);
+  const std::string dir = dvso::testing::FreshSimulatedSequence("dvso_mode_cli", 12);
+  ASSERT_FALSE(dir.empty());
   const std::string seq = dir + "/seq";
-  ASSERT_EQ(dvso::testing::RunDvso("simulate --quiet --out " + seq +
-                                   " --count 12 --width 320 --height 96 --texture-size 128").exit_code, 0);
   const std::string files = " --disparity-left " + seq + "/disp_0 --disparity-right " + seq + "/disp_1";
   const auto good = dvso::testing::RunDvso("odometry --mode dvso --no-progress --sequence " + seq + " --out " + dir +
                                            "/good" + files);
@@ -333,12 +330,9 @@ TEST(DvsoCli, RunsOnDisparityFilesAndRejectsBadInputWithOneLineNothingWritten) {
 
 
 TEST(DvsoCli, AblationAndTuneBaselinePrintEveryRow) {
-  const std::string dir = ::testing::TempDir() + "/dvso_ablation_cli";
-  std::filesystem::remove_all(dir);
-  std::filesystem::create_directories(dir);
+  const std::string dir = dvso::testing::FreshSimulatedSequence("dvso_ablation_cli", 15);
+  ASSERT_FALSE(dir.empty());
   const std::string seq = dir + "/seq";
-  ASSERT_EQ(dvso::testing::RunDvso("simulate --quiet --out " + seq +
-                                   " --count 15 --width 320 --height 96 --texture-size 128").exit_code, 0);
   const std::string common = " --sequence " + seq + " --gt " + seq + "/poses.txt --disparity-left " + seq +
                              "/disp_0 --disparity-right " + seq + "/disp_1 --preset fast";
   const auto ablation = dvso::testing::RunDvso("ablation --json --tuned-baseline 0.55 --out " + dir + "/abl" + common,

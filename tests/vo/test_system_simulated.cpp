@@ -151,12 +151,9 @@ namespace dvso::vo {
 namespace {
 
 TEST(SystemSimulated, DamagedFrameIsCountedAsLostAndTheRunGoesOnUnlessStrict) {
-  const std::string dir = ::testing::TempDir() + "/dvso_damaged";
-  std::filesystem::remove_all(dir);
-  std::filesystem::create_directories(dir);
+  const std::string dir = dvso::testing::FreshSimulatedSequence("dvso_damaged", 14);
+  ASSERT_FALSE(dir.empty());
   const std::string seq = dir + "/seq";
-  ASSERT_EQ(dvso::testing::RunDvso("simulate --quiet --out " + seq +
-                                   " --count 14 --width 320 --height 96 --texture-size 128").exit_code, 0);
   std::ofstream(seq + "/image_0/000007.png") << "not a png any more";
   const auto run = dvso::testing::RunDvso("odometry --mode stereo --preset fast --no-progress --sequence " + seq +
                                           " --out " + dir + "/out");
@@ -181,12 +178,9 @@ TEST(SystemSimulated, DamagedFrameIsCountedAsLostAndTheRunGoesOnUnlessStrict) {
 }
 
 TEST(SystemSimulated, InterruptWritesTheFramesProcessedAndAMarker) {
-  const std::string dir = ::testing::TempDir() + "/dvso_interrupt";
-  std::filesystem::remove_all(dir);
-  std::filesystem::create_directories(dir);
+  const std::string dir = dvso::testing::FreshSimulatedSequence("dvso_interrupt", 150);
+  ASSERT_FALSE(dir.empty());
   const std::string seq = dir + "/seq";
-  ASSERT_EQ(dvso::testing::RunDvso("simulate --quiet --out " + seq +
-                                   " --count 150 --width 320 --height 96 --texture-size 128").exit_code, 0);
   // Start, wait until frames are being processed, send SIGINT, collect the exit status.
   const std::string out = dir + "/out";
   const std::string script = "(" + std::string(DVSO_BINARY) + " odometry --mode mono --no-progress --sequence " + seq +
