@@ -161,6 +161,7 @@ step_train() {
   if [[ -f "$RUN/checkpoint_final.pt" ]]; then log "training already finished"; return 0; fi
   local resume=()
   [[ -f "$RUN/checkpoint_last.pt" ]] && resume=(--resume)
+  rm -f "$RUN/train.done"  # marks the end of this training process (stops the curve monitor)
   log "train $CONFIG -> $RUN ${resume[*]:-}"
   curve_monitor >> "$RUN/curve_monitor.log" 2>&1 &
   local monitor=$!
