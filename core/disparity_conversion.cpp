@@ -16,6 +16,8 @@ std::string ModelMetadata::ToJson() const {
   j["fx_over_width"] = fx_over_width;
   j["config_name"] = config_name;
   j["model_kind"] = model_kind;
+  j["tuned_baseline"] = tuned_baseline;
+  j["tuned_on"] = tuned_on;
   return j.dump(2);
 }
 
@@ -36,12 +38,15 @@ ModelMetadata ModelMetadata::FromJson(const std::string& json, const std::string
       else if (key == "fx_over_width") m.fx_over_width = value.get<double>();
       else if (key == "config_name") m.config_name = value.get<std::string>();
       else if (key == "model_kind") m.model_kind = value.get<std::string>();
+      else if (key == "tuned_baseline") m.tuned_baseline = value.get<double>();
+      else if (key == "tuned_on") m.tuned_on = value.get<std::string>();
       else throw Error(source, "unknown model metadata key '" + key + "'");
     }
   } catch (const nlohmann::json::exception& e) {
     throw Error(source, std::string("model metadata has a value of the wrong type: ") + e.what());
   }
-  RequireFile(m.baseline >= 0 && m.fx_over_width >= 0, source, "model metadata: negative baseline or fx/width");
+  RequireFile(m.baseline >= 0 && m.fx_over_width >= 0 && m.tuned_baseline >= 0, source,
+              "model metadata: negative baseline or fx/width");
   return m;
 }
 
@@ -51,10 +56,17 @@ double InverseDepthFromDisparity(double disparity_px, double fx, double virtual_
   return disparity_px / (fx * virtual_baseline);
 }
 
-double VirtualBaselineForCamera(const ModelMetadata& model, double fx, int width) {
+double VirtualBaselineForCamera(const ModelMetadata& model, double fx, int width, bool tuned) {
   Require(model.has_camera(), "the model carries no training camera (baseline, fx/width): pass --virtual-baseline");
   Require(fx > 0 && width > 0, "VirtualBaselineForCamera: camera fx and width must be > 0");
-  return model.baseline * model.fx_over_width / (fx / width);
+  const double baseline = tuned && model.tuned_baseline > 0 ? model.tuned_baseline : model.baseline;
+  return baseline * model.fx_over_width / (fx / width);
+}
+
+double TrainingCameraBaseline(const ModelMetadata& model, double virtual_baseline, double fx, int width) {
+  Require(model.has_camera(), "the model carries no training camera (baseline, fx/width)");
+  Require(fx > 0 && width > 0, "TrainingCameraBaseline: camera fx and width must be > 0");
+  return virtual_baseline * (fx / width) / model.fx_over_width;
 }
 
 float LeftRightDisparityError(const cv::Mat& disparity_left, const cv::Mat& disparity_right, int u, int v) {

@@ -35,6 +35,10 @@ struct ModelMetadata {
   double fx_over_width = 0;       // focal length / image width of the training camera
   std::string config_name;        // training config the model came from
   std::string model_kind;         // "stack" or "simple"
+  // Paper "tb": a virtual baseline found by `dvso tune-baseline` (grid search
+  // on a sequence with ground truth, expressed for the training camera); 0 = none.
+  double tuned_baseline = 0;
+  std::string tuned_on;           // the sequence it was tuned on
 
   bool has_camera() const { return baseline > 0 && fx_over_width > 0; }
   std::string ToJson() const;
@@ -47,8 +51,12 @@ struct ModelMetadata {
 // disparities give 0 (no depth).
 double InverseDepthFromDisparity(double disparity_px, double fx, double virtual_baseline);
 
-// b_v for a camera with focal length fx and image width `width` (header comment).
-double VirtualBaselineForCamera(const ModelMetadata& model, double fx, int width);
+// b_v for a camera with focal length fx and image width `width` (header
+// comment), from the training baseline, or from the tuned one when `tuned`
+// and the model carries one.
+double VirtualBaselineForCamera(const ModelMetadata& model, double fx, int width, bool tuned = false);
+// The inverse: a b_v found for that camera expressed for the training camera.
+double TrainingCameraBaseline(const ModelMetadata& model, double virtual_baseline, double fx, int width);
 
 // Paper section 4 (left-right check): e_lr = |D^L(p) - D^R(p')|, p' = p - (D^L(p), 0),
 // D^R sampled bilinearly. Returns +infinity when D^L(p) or any D^R tap is

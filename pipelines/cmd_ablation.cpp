@@ -1,8 +1,9 @@
 // `dvso ablation`: the paper's Table 3 on one sequence with ground truth:
 // mono (Sim(3)-aligned reference), in, in+vs, in+vs+lr, in+vs+tb, full
 // (in+vs+lr+tb); t_rel / r_rel unaligned (KITTI protocol), Sim(3) scale,
-// ATE and ms/frame per row. tb uses --tuned-baseline, else a grid search on
-// this very sequence (said in the output: the paper tunes on training sequences).
+// ATE and ms/frame per row. tb uses --tuned-baseline, else the model's tuned
+// baseline (`dvso tune-baseline --write-model`), else a grid search on this
+// very sequence (said in the output: the paper tunes on training sequences).
 #include <iostream>
 
 #include "core/error.h"
@@ -22,13 +23,17 @@ struct AblationArgs {
 
 void Run(const AblationArgs& args) {
   const ExperimentSetup setup = OpenExperiment(args.experiment);
-  const double default_bv = setup.options.dvso.virtual_baseline;
+  const double default_bv = setup.predictions.untuned_virtual_baseline;
   const std::string& out = args.experiment.out;
   std::ostream& log = args.experiment.json ? std::cerr : std::cout;
   log << "dvso ablation: " << args.experiment.sequence << ", predictions: " << setup.predictions.description << "\n";
 
   double tuned = args.tuned_baseline;
   std::string tuned_how = "given (--tuned-baseline)";
+  if (!(tuned > 0) && setup.predictions.tuned) {
+    tuned = setup.predictions.virtual_baseline;
+    tuned_how = "the model's, tuned on " + setup.predictions.metadata.tuned_on;
+  }
   if (!(tuned > 0)) {
     std::vector<double> grid;
     if (!args.tune_values.empty()) {

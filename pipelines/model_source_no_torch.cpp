@@ -10,5 +10,9 @@ std::unique_ptr<DisparitySource> OpenModelDisparitySource(const std::string& pat
                     "-DDVSO_WITH_TORCH=ON");
 }
 
+void WriteModelWithTunedBaseline(const std::string& in_path, const std::string&, const ModelMetadata&) {
+  throw Error(in_path, "this build has no LibTorch: cannot write models");
+}
+
 }  // namespace dvso::cli
 #endif

@@ -60,6 +60,7 @@ PredictionSource OpenPredictionSource(const PredictionSourceArgs& args, const Se
     out.source = std::make_unique<FileDisparitySource>(args.disparity_left, args.disparity_right, std::move(names));
     // Precomputed disparities are taken to be in this camera's stereo geometry.
     out.virtual_baseline = args.virtual_baseline > 0 ? args.virtual_baseline : sequence.camera().baseline;
+    out.untuned_virtual_baseline = out.virtual_baseline;
     Require(out.virtual_baseline > 0, sequence.root() +
                                           ": the sequence has no stereo baseline to interpret the disparity files: "
                                           "pass --virtual-baseline");
@@ -73,12 +74,15 @@ PredictionSource OpenPredictionSource(const PredictionSourceArgs& args, const Se
     ModelMetadata metadata;
     std::unique_ptr<DisparitySource> network = OpenModelDisparitySource(model, args.threads, &metadata);
     if (args.virtual_baseline > 0) {
-      out.virtual_baseline = args.virtual_baseline;
+      out.virtual_baseline = out.untuned_virtual_baseline = args.virtual_baseline;
     } else {
       RequireFile(metadata.has_camera(), model,
                   "the model carries no training camera (re-export it with `dvso export`, or pass --virtual-baseline)");
-      out.virtual_baseline = VirtualBaselineForCamera(metadata, cam.fx, cam.width);
+      out.untuned_virtual_baseline = VirtualBaselineForCamera(metadata, cam.fx, cam.width, /*tuned=*/false);
+      out.virtual_baseline = VirtualBaselineForCamera(metadata, cam.fx, cam.width, /*tuned=*/true);
+      out.tuned = metadata.tuned_baseline > 0;
     }
+    out.metadata = metadata;
     description << "model " << model << " (" << metadata.input_width << "x" << metadata.input_height
                 << ", trained with baseline " << metadata.baseline << " m, fx/width " << metadata.fx_over_width
                 << ", " << (args.threads > 0 ? std::to_string(args.threads) : std::string("all")) << " thread(s))";
@@ -90,6 +94,10 @@ PredictionSource OpenPredictionSource(const PredictionSourceArgs& args, const Se
   out.worker = worker.get();
   out.source = std::move(worker);
   description << ", virtual baseline " << out.virtual_baseline << " m";
+  if (out.tuned) {
+    description << " (tuned, paper 'tb', on " << out.metadata.tuned_on << "; untuned " << out.untuned_virtual_baseline
+                << " m)";
+  }
   out.description = description.str();
   return out;
 }

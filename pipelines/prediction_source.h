@@ -31,7 +31,10 @@ struct PredictionSourceArgs {
 struct PredictionSource {
   std::unique_ptr<DisparitySource> source;  // what the odometry reads (may wrap a worker)
   AsyncDisparitySource* worker = nullptr;   // the worker thread every source runs on
-  double virtual_baseline = 0;              // resolved b_v for this sequence's camera
+  double virtual_baseline = 0;              // resolved b_v for this sequence's camera (tuned when the model has one)
+  double untuned_virtual_baseline = 0;      // b_v from the training baseline alone (ablation rows without tb)
+  bool tuned = false;                       // virtual_baseline is the model's tuned one (paper "tb")
+  ModelMetadata metadata;                   // of the model (empty for files)
   std::string description;                  // one line for the run header
 };
 
@@ -51,6 +54,9 @@ std::unique_ptr<DisparitySource> OpenModelDisparitySource(const std::string& pat
 void ApplyPredictionSource(const PredictionSourceArgs& args, const PredictionSource& source,
                            vo::OdometryOptions* options);
 void AddPredictionOptions(CLI::App* cmd, PredictionSourceArgs* args);
+
+// Copies a TorchScript model with new metadata (torch builds; others throw).
+void WriteModelWithTunedBaseline(const std::string& in_path, const std::string& out_path, const ModelMetadata& metadata);
 
 // Path of the shipped model (source tree), or "" when it is not there.
 std::string ShippedModelPath();

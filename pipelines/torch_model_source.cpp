@@ -1,5 +1,6 @@
 // OpenModelDisparitySource for builds with LibTorch: the TorchScript predictor.
 #include "pipelines/prediction_source.h"
+#include "stacknet/export.h"
 #include "stacknet/predictor.h"
 
 namespace dvso::cli {
@@ -12,6 +13,10 @@ std::unique_ptr<DisparitySource> OpenModelDisparitySource(const std::string& pat
   auto predictor = std::make_unique<stacknet::TorchDisparityPredictor>(path, options);
   if (metadata != nullptr) *metadata = predictor->metadata();
   return predictor;
+}
+
+void WriteModelWithTunedBaseline(const std::string& in_path, const std::string& out_path, const ModelMetadata& metadata) {
+  stacknet::WriteModelWithMetadata(in_path, out_path, metadata);
 }
 
 }  // namespace dvso::cli

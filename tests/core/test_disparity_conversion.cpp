@@ -41,6 +41,11 @@ TEST(DisparityConversion, VirtualBaselineFollowsFocalLengthPerWidth) {
   EXPECT_NEAR(InverseDepthFromDisparity(disparity_px, 1440.0, VirtualBaselineForCamera(model, 1440.0, 1240)),
               1.0 / 20.0, 1e-12);
   EXPECT_THROW(VirtualBaselineForCamera(ModelMetadata{}, 720.0, 1240), Error);
+  // Paper "tb": a tuned baseline is used when asked for, converted the same way, and the inverse round-trips.
+  model.tuned_baseline = 0.6;
+  EXPECT_NEAR(VirtualBaselineForCamera(model, 1440.0, 1240, /*tuned=*/true), 0.3, 1e-12);
+  EXPECT_NEAR(VirtualBaselineForCamera(model, 1440.0, 1240, /*tuned=*/false), 0.27, 1e-12);
+  EXPECT_NEAR(TrainingCameraBaseline(model, 0.3, 1440.0, 1240), 0.6, 1e-12);
 }
 
 TEST(DisparityConversion, LeftRightErrorComparesWithTheRightMapAtTheMatch) {
@@ -79,6 +84,8 @@ TEST(DisparityConversion, MetadataJsonRoundTripAndStrictKeys) {
   m.fx_over_width = 0.579;
   m.config_name = "cpu";
   m.model_kind = "stack";
+  m.tuned_baseline = 0.61;
+  m.tuned_on = "sim 07";
   const ModelMetadata back = ModelMetadata::FromJson(m.ToJson(), "test");
   EXPECT_EQ(back.input_width, 512);
   EXPECT_EQ(back.input_height, 160);
@@ -86,6 +93,8 @@ TEST(DisparityConversion, MetadataJsonRoundTripAndStrictKeys) {
   EXPECT_DOUBLE_EQ(back.fx_over_width, 0.579);
   EXPECT_EQ(back.config_name, "cpu");
   EXPECT_EQ(back.model_kind, "stack");
+  EXPECT_DOUBLE_EQ(back.tuned_baseline, 0.61);
+  EXPECT_EQ(back.tuned_on, "sim 07");
   EXPECT_THROW(ModelMetadata::FromJson("{\"basline\": 1}", "test"), Error);
   EXPECT_THROW(ModelMetadata::FromJson("not json", "test"), Error);
   EXPECT_THROW(ModelMetadata::FromJson("{\"baseline\": \"x\"}", "test"), Error);
