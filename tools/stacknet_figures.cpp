@@ -168,7 +168,7 @@ int Curve(const std::string& csv_path, const std::string& out) {
   panels.push_back(dvso::RenderPlot(losses, top));
   if (!abs_rel.x.empty()) {
     dvso::PlotOptions bottom = top;
-    bottom.title = "held-out abs rel (KITTI 08/09/10 sims, every 10th frame, 0-80 m)";
+    bottom.title = "held-out abs rel (KITTI 08/09/10 sims, every 5th frame, 0-80 m)";
     panels.push_back(dvso::RenderPlot({abs_rel}, bottom));
   }
   cv::Mat all;
