@@ -1,7 +1,8 @@
 // `dvso predict --model model.pt (--images DIR | --sequence DIR) --out DIR
-// [--post-process] [--device auto|cpu|cuda]`: writes left/%06d.png and
-// right/%06d.png (KITTI uint16, disparity * 256, at the input image
-// resolution) plus colour-mapped previews in left_color/ and right_color/.
+// [--post-process] [--device auto|cpu|cuda] [--no-color] [--threads N]`: writes
+// left/NAME.png and right/NAME.png (KITTI uint16, disparity * 256, at the input
+// image resolution) plus colour-mapped previews in left_color/ and right_color/.
+// NAME: the input's file name with --images, %06d with --sequence.
 #include <algorithm>
 #include <chrono>
 #include <future>
