@@ -16,7 +16,7 @@
 namespace dvso::cli {
 
 // The model `dvso odometry --mode dvso` uses when none is named (relative to the source tree).
-inline constexpr const char* kShippedModel = "models/stacknet_small.pt";
+inline constexpr const char* kShippedModel = "models/stacknet_cpu_main.pt";
 
 struct PredictionSourceArgs {
   std::string model;               // TorchScript file; "" = the shipped model (unless files are given)

@@ -14,7 +14,8 @@ namespace dvso::cli {
 
 void AddExportCommand(CLI::App& app) {
   struct Args {
-    std::string checkpoint, config, out, stamp;
+    std::string checkpoint, config, out, stamp, tuned_on;
+    double tuned_baseline = -1;
     bool random_init = false;
     stacknet::ExportOptions options;
   };
@@ -32,15 +33,22 @@ void AddExportCommand(CLI::App& app) {
   cmd->add_option("--stamp", args->stamp,
                   "Instead of exporting: copy this exported .pt to --out with the training camera metadata")
       ->check(CLI::ExistingFile);
+  cmd->add_option("--tuned-baseline", args->tuned_baseline,
+                  "With --stamp: the tuned virtual baseline (paper 'tb', training camera, metres; 0 = none)");
+  cmd->add_option("--tuned-on", args->tuned_on, "With --stamp and --tuned-baseline: the sequence it was tuned on");
   cmd->add_option("--model", args->options.model,
                   "auto (as trained), simple (SimpleNet only) or stack (SimpleNet + ResidualNet)");
   cmd->callback([args] {
     if (!args->stamp.empty()) {
       ModelMetadata metadata = stacknet::ReadModelMetadata(args->stamp);
-      Require(args->options.training_baseline > 0 && args->options.training_fx_over_width > 0,
-              "--stamp needs --training-baseline and --training-fx-over-width");
-      metadata.baseline = args->options.training_baseline;
-      metadata.fx_over_width = args->options.training_fx_over_width;
+      if (args->options.training_baseline > 0) metadata.baseline = args->options.training_baseline;
+      if (args->options.training_fx_over_width > 0) metadata.fx_over_width = args->options.training_fx_over_width;
+      Require(metadata.has_camera(), "--stamp: the model has no training camera: give --training-baseline and "
+                                     "--training-fx-over-width");
+      if (args->tuned_baseline >= 0) {
+        metadata.tuned_baseline = args->tuned_baseline;
+        metadata.tuned_on = args->tuned_on;
+      }
       stacknet::WriteModelWithMetadata(args->stamp, args->out, metadata);
       std::cout << "Wrote " << args->out << " with metadata " << metadata.ToJson() << std::endl;
       return;

@@ -13,14 +13,14 @@ namespace dvso {
 namespace {
 
 TEST(DvsoModelCli, ShippedModelRunsOnlineAndTunedBaselineIsStamped) {
-  const std::string model = std::string(DVSO_TEST_DATA_DIR) + "/../models/stacknet_small.pt";
+  const std::string model = std::string(DVSO_TEST_DATA_DIR) + "/../models/stacknet_cpu_main.pt";
   ASSERT_TRUE(std::filesystem::exists(model));
   const std::string dir = testing::FreshSimulatedSequence("dvso_model_cli", 15);
   ASSERT_FALSE(dir.empty());
   const std::string seq = dir + "/seq";
   const auto run = testing::RunDvso("odometry --mode dvso --no-progress --sequence " + seq + " --out " + dir + "/out");
   ASSERT_EQ(run.exit_code, 0) << run.out;
-  EXPECT_NE(run.out.find("stacknet_small.pt"), std::string::npos) << run.out;  // the shipped model by default
+  EXPECT_NE(run.out.find("stacknet_cpu_main.pt"), std::string::npos) << run.out;  // the shipped model by default
   EXPECT_EQ(ReadTrajectory(dir + "/out/trajectory.txt", TrajectoryFormat::kKitti).size(), 15u);
 
   const auto tune = testing::RunDvso("tune-baseline --values 0.4:0.2:0.8 --sequence " + seq + " --gt " + seq +
