@@ -35,13 +35,7 @@ void Run(const AblationArgs& args) {
     tuned_how = "the model's, tuned on " + setup.predictions.metadata.tuned_on;
   }
   if (!(tuned > 0)) {
-    std::vector<double> grid;
-    if (!args.tune_values.empty()) {
-      grid = ParseRange(args.tune_values);
-    } else {
-      for (int k = -4; k <= 4; ++k) grid.push_back(default_bv * (1.0 + 0.05 * k));  // +-20 % around the default
-    }
-    TuneVirtualBaseline(setup, grid, args.experiment.count, JoinPath(out, "tune"), &tuned, !args.experiment.json);
+    TuneVirtualBaseline(setup, BaselineGrid(args.tune_values, default_bv), args.experiment.count, JoinPath(out, "tune"), &tuned, !args.experiment.json);
     tuned_how = "grid search on this sequence";
   }
   log << "virtual baseline: default " << default_bv << " m, tuned " << tuned << " m (" << tuned_how << ")\n";

@@ -26,12 +26,7 @@ void AddTuneBaselineCommand(CLI::App& app) {
             "--write-model needs --model");
     const ExperimentSetup setup = OpenExperiment(args->experiment);
     const double default_bv = setup.predictions.untuned_virtual_baseline;
-    std::vector<double> grid;
-    if (!args->values.empty()) {
-      grid = ParseRange(args->values);
-    } else {
-      for (int k = -4; k <= 4; ++k) grid.push_back(default_bv * (1.0 + 0.05 * k));
-    }
+    const std::vector<double> grid = BaselineGrid(args->values, default_bv);
     double best = 0;
     const std::vector<VariantResult> results =
         TuneVirtualBaseline(setup, grid, args->experiment.count, args->experiment.out, &best, !args->experiment.json);

@@ -122,6 +122,15 @@ std::vector<double> ParseRange(const std::string& text) {
   return values;
 }
 
+std::vector<double> BaselineGrid(const std::string& text, double default_baseline) {
+  if (!text.empty()) return ParseRange(text);
+  constexpr int kStepsEachSide = 4;         // +-20 %
+  constexpr double kRelativeStep = 0.05;
+  std::vector<double> grid;
+  for (int k = -kStepsEachSide; k <= kStepsEachSide; ++k) grid.push_back(default_baseline * (1.0 + kRelativeStep * k));
+  return grid;
+}
+
 std::string FormatVariantTable(const std::vector<VariantResult>& results) {
   std::ostringstream out;
   out << std::left << std::setw(14) << "variant" << std::right << std::setw(10) << "t_rel %" << std::setw(16)

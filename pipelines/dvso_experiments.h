@@ -66,6 +66,10 @@ std::vector<VariantResult> TuneVirtualBaseline(const ExperimentSetup& setup, con
 // "start:step:end" (inclusive) -> values; throws dvso::Error on bad text.
 std::vector<double> ParseRange(const std::string& text);
 
+// The b_v grid of a search: ParseRange(text), or without text nine values
+// +-20 % (steps of 5 %) around `default_baseline`.
+std::vector<double> BaselineGrid(const std::string& text, double default_baseline);
+
 // Table of results in the paper's Table 3 layout.
 std::string FormatVariantTable(const std::vector<VariantResult>& results);
 

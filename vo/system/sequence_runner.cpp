@@ -1,12 +1,13 @@
 #include "vo/system/sequence_runner.h"
 
 #include <algorithm>
+#include <chrono>
 #include <csignal>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
-#include <chrono>
 #include <memory>
+#include <optional>
 #include <sstream>
 
 #include "core/error.h"
@@ -44,6 +45,20 @@ class InterruptScope {
   void (*old_int_)(int) = SIG_DFL;
   void (*old_term_)(int) = SIG_DFL;
 };
+
+// Frame `index`, or nothing when its images cannot be read: a damaged image
+// must not throw away the run before it, so it is warned about and skipped
+// (the caller counts it as lost). `strict` rethrows instead.
+std::optional<StereoFrame> ReadFrameOrWarn(const SequenceReader& sequence, int index, const SequenceReadOptions& read,
+                                           bool strict) {
+  try {
+    return sequence.Read(index, read);
+  } catch (const Error& e) {
+    if (strict) throw;
+    std::cerr << "\ndvso: warning: frame " << index << " skipped (counted as lost): " << e.what() << std::endl;
+    return std::nullopt;
+  }
+}
 }  // namespace
 
 void SequenceRunOptions::Check() const {
@@ -90,19 +105,14 @@ SequenceRunSummary RunOdometryOnSequence(const SequenceReader& sequence, const O
       summary.interrupted = true;
       break;
     }
-    StereoFrame frame;
+    const std::optional<StereoFrame> frame = ReadFrameOrWarn(sequence, i, read, run.strict);
     FrameEvent ev;
-    try {
-      frame = sequence.Read(i, read);
-    } catch (const Error& e) {
-      if (run.strict) throw;
-      // A damaged image must not throw away the run before it: warn, count, go on.
-      std::cerr << "\ndvso: warning: frame " << i << " skipped (counted as lost): " << e.what() << std::endl;
+    if (frame) {
+      ev = system.ProcessFrame(i, frame->timestamp, frame->left, frame->right);
+    } else {
       ++summary.unreadable;
-      const double t = i < static_cast<int>(sequence.timestamps().size()) ? sequence.timestamps()[i] : 0.0;
-      ev = system.ReportUnreadableFrame(i, t);
+      ev = system.ReportUnreadableFrame(i, sequence.timestamps().at(i));
     }
-    if (ev.status != FrameStatus::kUnreadable) ev = system.ProcessFrame(i, frame.timestamp, frame.left, frame.right);
     total_ms += ev.total_ms;
     summary.max_ms = std::max(summary.max_ms, ev.total_ms);
     ++summary.frames;

@@ -33,8 +33,7 @@ void System::MakeKeyframe(int frame_index, const ImagePyramidPtr& left, const cv
                           const Eigen::Isometry3d& T_cw, double a, double b, FrameEvent* event) {
   ImagePyramidPtr right_pyr;
   if (capabilities_.has_right_image && !right.empty()) right_pyr = MakePyramid(right);
-  KeyframePrediction prediction;
-  bool have_prediction = false;
+  KeyframePrediction prediction;  // stays empty while a keyframe-async prediction is pending
   if (capabilities_.has_predictions) {
     if (prediction_timing_ == PredictionTiming::kKeyframeAsync) {
       // At most one prediction outstanding: the previous keyframe's comes first.
@@ -42,15 +41,14 @@ void System::MakeKeyframe(int frame_index, const ImagePyramidPtr& left, const cv
       predictions_->Prefetch(frame_index, current_left_image_);
       if (predictions_->IsReady(frame_index)) {
         prediction = FetchPrediction(frame_index, current_left_image_);
-        have_prediction = true;
       } else {
         pending_prediction_id_ = frame_index;  // D^R and candidates follow when it arrives
       }
     } else {
       prediction = FetchPrediction(frame_index, current_left_image_);
-      have_prediction = true;
     }
   }
+  const bool have_prediction = !prediction.left.empty();
   KeyframeInput input;
   input.id = frame_index;
   input.world_to_camera = T_cw;
