@@ -99,6 +99,27 @@ ErrorStats StereoWarpError(const SimulatedFrame& f, double shift) {
   return Summarise(errors);
 }
 
+// |I_a(p) - I_b(q + offset)| over the pixels p of frame a that the GT relative
+// pose maps to q in frame b without occlusion (depths agree within 2 %).
+ErrorStats TemporalWarpError(const SimulatedFrame& a, const SimulatedFrame& b, const PinholeCamera& cam,
+                             double offset_x, double offset_y) {
+  const Eigen::Isometry3d T_b_a = b.T_first_camera.inverse() * a.T_first_camera;
+  std::vector<float> errors;
+  for (int y = 2; y < cam.height - 2; ++y)
+    for (int x = 2; x < cam.width - 2; ++x) {
+      const float z = a.left.depth.at<float>(y, x);
+      if (z <= 0) continue;
+      const Eigen::Vector3d p = T_b_a * (z * cam.Unproject(x, y));
+      if (p.z() < 0.5) continue;
+      const Eigen::Vector2d q = cam.Project(p);
+      if (!cam.InImage(q.x(), q.y(), 2)) continue;
+      if (std::abs(BilinearF(b.left.depth, q.x(), q.y()) - p.z()) > 0.02 * p.z()) continue;  // occluded in b
+      const float warped = Bilinear(b.left.grey, q.x() + offset_x, q.y() + offset_y);
+      errors.push_back(std::abs(a.left.grey.at<uint8_t>(y, x) - warped));
+    }
+  return Summarise(errors);
+}
+
 class SimulatorTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() { simulator_ = std::make_unique<StreetSimulator>(SmallOptions()); }
@@ -152,21 +173,7 @@ TEST_F(SimulatorTest, ReprojectionWithGtPoseIntoNextFrameIsPhotoConsistent) {
   const PinholeCamera& cam = simulator_->camera().left;
   const Eigen::Isometry3d T_b_a = b.T_first_camera.inverse() * a.T_first_camera;
   ASSERT_GT(T_b_a.translation().norm(), 0.3) << "the camera should move between frames";
-  std::vector<float> errors, shuffled;
-  for (int y = 2; y < cam.height - 2; ++y)
-    for (int x = 2; x < cam.width - 2; ++x) {
-      const float z = a.left.depth.at<float>(y, x);
-      if (z <= 0) continue;
-      const Eigen::Vector3d p = T_b_a * (z * cam.Unproject(x, y));
-      if (p.z() < 0.5) continue;
-      const Eigen::Vector2d q = cam.Project(p);
-      if (!cam.InImage(q.x(), q.y(), 2)) continue;
-      const float zb = BilinearF(b.left.depth, q.x(), q.y());
-      if (std::abs(zb - p.z()) > 0.02 * p.z()) continue;  // occluded in frame b
-      errors.push_back(std::abs(a.left.grey.at<uint8_t>(y, x) - Bilinear(b.left.grey, q.x(), q.y())));
-      shuffled.push_back(std::abs(a.left.grey.at<uint8_t>(y, x) - Bilinear(b.left.grey, q.x() + 3, q.y())));
-    }
-  const ErrorStats good = Summarise(errors), bad = Summarise(shuffled);
+  const ErrorStats good = TemporalWarpError(a, b, cam, 0.0, 0.0), bad = TemporalWarpError(a, b, cam, 3.0, 0.0);
   std::printf("temporal warp |error|: mean %.2f median %.2f p90 %.2f over %d px (3 px off: mean %.2f)\n", good.mean,
               good.median, good.p90, good.count, bad.mean);
   EXPECT_GT(good.count, static_cast<int>(cam.width * cam.height / 3));
@@ -399,21 +406,7 @@ TEST(Simulator, VariedAppearanceKeepsTheGroundTruthExact) {
     }
   // Temporal: the GT poses (height bounce included) reproject frame 0 into frame 1.
   const PinholeCamera& cam = simulator.camera().left;
-  const Eigen::Isometry3d T_b_a = b.T_first_camera.inverse() * a.T_first_camera;
-  std::vector<float> errors, shifted;
-  for (int y = 2; y < cam.height - 2; ++y)
-    for (int x = 2; x < cam.width - 2; ++x) {
-      const float z = a.left.depth.at<float>(y, x);
-      if (z <= 0) continue;
-      const Eigen::Vector3d p = T_b_a * (z * cam.Unproject(x, y));
-      if (p.z() < 0.5) continue;
-      const Eigen::Vector2d q = cam.Project(p);
-      if (!cam.InImage(q.x(), q.y(), 2)) continue;
-      if (std::abs(BilinearF(b.left.depth, q.x(), q.y()) - p.z()) > 0.02 * p.z()) continue;
-      errors.push_back(std::abs(a.left.grey.at<uint8_t>(y, x) - Bilinear(b.left.grey, q.x(), q.y())));
-      shifted.push_back(std::abs(a.left.grey.at<uint8_t>(y, x) - Bilinear(b.left.grey, q.x(), q.y() + 2)));
-    }
-  const ErrorStats temporal = Summarise(errors), off = Summarise(shifted);
+  const ErrorStats temporal = TemporalWarpError(a, b, cam, 0.0, 0.0), off = TemporalWarpError(a, b, cam, 0.0, 2.0);
   EXPECT_GT(temporal.count, static_cast<int>(cam.width * cam.height / 3));
   EXPECT_LT(temporal.median, 2.5);
   EXPECT_GT(off.mean, 1.5 * temporal.mean) << "a 2 px vertical error (a missing height bounce) must show";
