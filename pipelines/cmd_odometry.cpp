@@ -71,6 +71,9 @@ void Run(const OdometryArgs& args) {
   if (s.interrupted) {
     std::cout << "interrupted: outputs hold the " << s.frames << " frames processed (marker " << args.out
               << "/INTERRUPTED)" << std::endl;
+    // Join the prediction worker before leaving: std::exit skips the destructors
+    // of this frame's locals, and a worker thread still running at exit aborts.
+    predictions = PredictionSource{};
     std::exit(130);  // the conventional exit status after SIGINT
   }
   std::cout << "written: " << args.out << "/trajectory.txt, trajectory_tum.txt, run_log.csv, config.yaml"
