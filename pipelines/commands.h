@@ -13,6 +13,7 @@ void AddEvalOdometryCommand(CLI::App& app);  // cmd_eval_odometry.cpp
 void AddEvalDepthCommand(CLI::App& app);     // cmd_eval_depth.cpp
 void AddOdometryCommand(CLI::App& app);      // cmd_odometry.cpp
 void AddLabelsCommand(CLI::App& app);        // cmd_labels.cpp
+void AddEvalLabelsCommand(CLI::App& app);    // cmd_eval_labels.cpp
 void AddAblationCommand(CLI::App& app);      // cmd_ablation.cpp
 void AddTuneBaselineCommand(CLI::App& app);  // cmd_tune_baseline.cpp
 #ifdef DVSO_WITH_TORCH

@@ -16,6 +16,7 @@ int main(int argc, char** argv) {
   dvso::cli::AddEvalDepthCommand(app);
   dvso::cli::AddOdometryCommand(app);
   dvso::cli::AddLabelsCommand(app);
+  dvso::cli::AddEvalLabelsCommand(app);
   dvso::cli::AddAblationCommand(app);
   dvso::cli::AddTuneBaselineCommand(app);
 #ifdef DVSO_WITH_TORCH

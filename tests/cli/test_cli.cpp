@@ -6,6 +6,10 @@
 #include <fstream>
 #include <string>
 
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+
+#include "core/disparity_io.h"
 #include "tests/dvso_cli_runner.h"
 
 namespace fs = std::filesystem;
@@ -60,4 +64,30 @@ TEST(Cli, OdometryOnMissingSequenceFailsCleanly) {
   EXPECT_EQ(r.exit_code, 1) << r.out;
   EXPECT_NE(r.out.find("absent"), std::string::npos) << r.out;
   EXPECT_FALSE(fs::exists(dir + "/out/trajectory.txt"));
+}
+
+TEST(Cli, EvalLabelsCountsWrongLabelsByPlaceAndNamesAMissingGroundTruth) {
+  const std::string dir = TempDir("eval_labels");
+  fs::create_directories(dir + "/labels");
+  fs::create_directories(dir + "/gt");
+  cv::Mat gt(10, 40, CV_32F, cv::Scalar(10.f));
+  gt.colRange(20, 23).setTo(20.f);  // a 3 px pole
+  cv::Mat labels(10, 40, CV_32F, cv::Scalar(0.f));
+  labels.at<float>(5, 21) = 12.f;  // on the pole, wrong by 8 px
+  labels.at<float>(5, 5) = 10.25f;  // open background, right
+  dvso::WriteKittiMapPng(dir + "/labels/000000.png", labels);
+  dvso::WriteKittiMapPng(dir + "/gt/000000.png", gt);
+  const CliRun r = RunDvso("eval-labels --labels " + dir + "/labels --gt " + dir + "/gt --json");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  const nlohmann::json j = nlohmann::json::parse(r.out.substr(r.out.find('{')));
+  EXPECT_EQ(j["compared_labels"].get<int>(), 2);
+  EXPECT_DOUBLE_EQ(j["share_within_1px"].get<double>(), 0.5);
+  EXPECT_EQ(j["by_kind"]["thin"]["wrong"].get<int>(), 1);
+  EXPECT_EQ(j["by_kind"]["other"]["labels"].get<int>(), 1);
+  EXPECT_EQ(j["by_kind"]["other"]["wrong"].get<int>(), 0);
+
+  dvso::WriteKittiMapPng(dir + "/labels/000001.png", labels);  // no GT for this one
+  const CliRun missing = RunDvso("eval-labels --labels " + dir + "/labels --gt " + dir + "/gt");
+  EXPECT_EQ(missing.exit_code, 1);
+  EXPECT_NE(missing.out.find("000001.png"), std::string::npos) << missing.out;
 }
