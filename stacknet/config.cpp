@@ -63,6 +63,8 @@ void VisitNetwork(Map& m, NetworkOptions& o) {
   m.Get("max_disparity", &o.max_disparity);
   m.Get("residual_leaky_slope", &o.residual_leaky_slope);
   m.Get("residual_blocks", &o.residual_blocks);
+  m.Get("normalization", &o.normalization);
+  m.Get("initial_disparity", &o.initial_disparity);
 }
 template <typename Map>
 void VisitLoss(Map& m, LossOptions& o) {

@@ -34,6 +34,27 @@ torch::nn::Conv2d MakeConv(int64_t in, int64_t out, int64_t kernel, int64_t stri
       torch::nn::Conv2dOptions(in, out, kernel).stride(stride).padding(kernel / 2).bias(bias));
 }
 
+torch::nn::GroupNorm MakeGroupNorm(int64_t channels) {
+  constexpr int64_t kMaxNormGroups = 8;
+  int64_t groups = std::min(kMaxNormGroups, channels);
+  while (channels % groups != 0) --groups;
+  return torch::nn::GroupNorm(torch::nn::GroupNormOptions(groups, channels));
+}
+
+void InitConvolutionsHe(torch::nn::Module& module) {
+  torch::NoGradGuard no_grad;
+  auto init = [](torch::nn::Module& m) {
+    if (auto* conv = m.as<torch::nn::Conv2dImpl>()) {
+      torch::nn::init::kaiming_normal_(conv->weight, 0.0, torch::kFanOut, torch::kReLU);
+      if (conv->bias.defined()) conv->bias.zero_();
+    }
+  };
+  // modules(include_self = true) needs shared_from_this(), which a module under construction
+  // does not have yet: visit the module itself, then its descendants.
+  init(module);
+  for (auto& child : module.modules(/*include_self=*/false)) init(*child);
+}
+
 SkipDecoderImpl::SkipDecoderImpl(const std::vector<int64_t>& skip_channels, int64_t bottom_channels,
                                  double width_multiplier, Activation activation, double leaky_slope,
                                  double sigmoid_scale)
@@ -61,6 +82,18 @@ SkipDecoderImpl::SkipDecoderImpl(const std::vector<int64_t>& skip_channels, int6
       (*head)->weight.zero_();
       (*head)->bias.zero_();
     }
+  }
+}
+
+void SkipDecoderImpl::StartHeadsAt(double disparity) {
+  TORCH_CHECK(sigmoid_scale_ > 0 && disparity > 0 && disparity < sigmoid_scale_,
+              "StartHeadsAt needs sigmoid heads and 0 < disparity < their scale");
+  const double p = disparity / sigmoid_scale_;
+  const double logit = std::log(p / (1.0 - p));
+  torch::NoGradGuard no_grad;
+  for (auto* head : {&head3, &head2, &head1, &head0}) {
+    (*head)->weight.zero_();  // flat start; the first step already gives the weights a gradient
+    (*head)->bias.fill_(logit);
   }
 }
 

@@ -28,6 +28,15 @@ int64_t ScaledChannels(int64_t channels, double width_multiplier);
 // "Same"-padded convolution.
 torch::nn::Conv2d MakeConv(int64_t in, int64_t out, int64_t kernel, int64_t stride = 1, bool bias = true);
 
+// GroupNorm over `channels` with the largest group count <= kMaxNormGroups that divides it
+// (narrow CPU networks have 4..128 channels per layer).
+torch::nn::GroupNorm MakeGroupNorm(int64_t channels);
+
+// He (Kaiming) normal initialisation, fan-out, of every convolution in `module` (biases 0):
+// variance-preserving for (leaky) ReLU / ELU networks trained from scratch. LibTorch's default
+// (uniform, a = sqrt(5)) shrinks the activations by ~sqrt(3) per layer.
+void InitConvolutionsHe(torch::nn::Module& module);
+
 // Encoder output consumed by the decoder: skips at 1/2, 1/4, 1/8, 1/16 and the
 // bottleneck at 1/32 of the input resolution.
 struct EncoderFeatures {
@@ -49,6 +58,11 @@ class SkipDecoderImpl : public torch::nn::Module {
   SkipDecoderImpl(const std::vector<int64_t>& skip_channels, int64_t bottom_channels, double width_multiplier,
                   Activation activation, double leaky_slope, double sigmoid_scale);
   ScaleMaps forward(const EncoderFeatures& features);
+  // Sigmoid heads only: every head starts at `disparity` (fraction of the width) everywhere,
+  // bias = logit(disparity / sigmoid_scale), weights 0. With the default
+  // bias 0 the first output is sigmoid_scale / 2 (0.15 of the width, ~8x a street scene's
+  // median disparity), and a 2000-step CPU run spends its steps moving that offset.
+  void StartHeadsAt(double disparity);
 
  private:
   torch::Tensor Act(const torch::Tensor& x) const { return Activate(x, activation_, leaky_slope_); }

@@ -14,14 +14,21 @@ DisparityPyramid SplitLeftRight(const ScaleMaps& maps) {
 }
 
 SimpleNetImpl::SimpleNetImpl(const NetworkOptions& options) {
-  encoder = register_module("encoder", ResNetEncoder(options.encoder_depth, options.width_multiplier, 3));
+  const bool group_norm = options.normalization == "group";
+  encoder = register_module("encoder", ResNetEncoder(options.encoder_depth, options.width_multiplier, 3, group_norm));
   decoder = register_module("decoder", SkipDecoder(encoder->skip_channels(), encoder->bottom_channels(),
                                                    options.width_multiplier, Activation::kElu, 0.0,
                                                    options.max_disparity));
+  if (group_norm) InitConvolutionsHe(*this);
+  if (options.initial_disparity > 0) decoder->StartHeadsAt(options.initial_disparity);
+  standardize_input_ = group_norm;
 }
 
 DisparityPyramid SimpleNetImpl::forward(const torch::Tensor& left_image) {
-  return SplitLeftRight(decoder->forward(encoder->forward(left_image)));
+  // Zero-mean, unit-scale input for the from-scratch encoder (typical street-image statistics).
+  constexpr double kImageMean = 0.45, kImageStd = 0.225;
+  const torch::Tensor input = standardize_input_ ? (left_image - kImageMean) / kImageStd : left_image;
+  return SplitLeftRight(decoder->forward(encoder->forward(input)));
 }
 
 ResidualInputs MakeResidualInputs(const torch::Tensor& left_image, const torch::Tensor& simple_left_0,
@@ -38,7 +45,9 @@ ResidualNetImpl::ResidualNetImpl(const NetworkOptions& options) : leaky_slope_(o
   const double w = options.width_multiplier;
   const int64_t input_channels = 3 + 1 + 3 + 3 + 3;
   const int64_t stem_channels = ScaledChannels(32, w);
+  const bool group_norm = options.normalization == "group";
   stem = register_module("stem", MakeConv(input_channels, stem_channels, 7, 2));
+  if (group_norm) stem_norm = register_module("stem_norm", MakeGroupNorm(stem_channels));
   const int per_stage = options.residual_blocks / 4;  // paper: 12 blocks = 4 stages x 3
   int64_t channels = stem_channels;
   std::vector<int64_t> skip_channels{stem_channels};
@@ -46,7 +55,7 @@ ResidualNetImpl::ResidualNetImpl(const NetworkOptions& options) : leaky_slope_(o
     torch::nn::Sequential stage;
     for (int b = 0; b < per_stage; ++b) {
       ResidualUnit unit(channels, ScaledChannels(planes, w), b == 0 ? 2 : 1, /*bottleneck=*/false,
-                        Activation::kLeakyRelu, leaky_slope_);
+                        Activation::kLeakyRelu, leaky_slope_, group_norm);
       channels = unit->out_channels();
       stage->push_back(unit);
     }
@@ -59,13 +68,20 @@ ResidualNetImpl::ResidualNetImpl(const NetworkOptions& options) : leaky_slope_(o
   stage3 = register_module("stage3", make_stage(256));  // 1/16
   skip_channels.push_back(channels);
   stage4 = register_module("stage4", make_stage(512));  // 1/32
+  if (group_norm) {
+    // The encoder only: the decoder's heads stay zero, so StackNet starts as SimpleNet.
+    InitConvolutionsHe(*stem);
+    for (auto* stage : {&stage1, &stage2, &stage3, &stage4}) InitConvolutionsHe(**stage);
+  }
   decoder = register_module("decoder", SkipDecoder(skip_channels, channels, w, Activation::kLeakyRelu,
                                                    leaky_slope_, /*sigmoid_scale=*/0.0));
 }
 
 DisparityPyramid ResidualNetImpl::forward(const torch::Tensor& stacked_inputs) {
   EncoderFeatures f;
-  const torch::Tensor s0 = torch::leaky_relu(stem->forward(stacked_inputs), leaky_slope_);
+  torch::Tensor stem_out = stem->forward(stacked_inputs);
+  if (stem_norm) stem_out = stem_norm->forward(stem_out);
+  const torch::Tensor s0 = torch::leaky_relu(stem_out, leaky_slope_);
   const torch::Tensor s1 = stage1->forward(s0);
   const torch::Tensor s2 = stage2->forward(s1);
   const torch::Tensor s3 = stage3->forward(s2);

@@ -37,6 +37,7 @@ class SimpleNetImpl : public torch::nn::Module {
  private:
   ResNetEncoder encoder{nullptr};
   SkipDecoder decoder{nullptr};
+  bool standardize_input_ = false;  // with normalization "group": (I - 0.45) / 0.225 (the plain net keeps [0, 1])
 };
 TORCH_MODULE(SimpleNet);
 
@@ -59,6 +60,7 @@ class ResidualNetImpl : public torch::nn::Module {
  private:
   double leaky_slope_;
   torch::nn::Conv2d stem{nullptr};
+  torch::nn::GroupNorm stem_norm{nullptr};  // with normalization "group"
   torch::nn::Sequential stage1{nullptr}, stage2{nullptr}, stage3{nullptr}, stage4{nullptr};
   SkipDecoder decoder{nullptr};
 };

@@ -15,6 +15,9 @@ void NetworkOptions::Check() const {
   Require(max_disparity > 0 && max_disparity <= 1, "network.max_disparity must be in (0, 1]");
   Require(residual_leaky_slope >= 0 && residual_leaky_slope < 1, "network.residual_leaky_slope must be in [0, 1)");
   Require(residual_blocks >= 4 && residual_blocks % 4 == 0, "network.residual_blocks must be a multiple of 4");
+  Require(initial_disparity >= 0 && initial_disparity < max_disparity,
+          "network.initial_disparity must be in [0, max_disparity)");
+  Require(normalization == "group" || normalization == "none", "network.normalization must be group or none");
 }
 
 void LossOptions::Check() const {

@@ -5,7 +5,7 @@
 namespace dvso::stacknet {
 
 ResidualUnitImpl::ResidualUnitImpl(int64_t in_channels, int64_t planes, int64_t stride, bool bottleneck,
-                                   Activation activation, double leaky_slope)
+                                   Activation activation, double leaky_slope, bool group_norm)
     : activation_(activation), leaky_slope_(leaky_slope), bottleneck_(bottleneck) {
   if (bottleneck_) {
     out_channels_ = planes * 4;
@@ -20,22 +20,29 @@ ResidualUnitImpl::ResidualUnitImpl(int64_t in_channels, int64_t planes, int64_t 
   if (stride != 1 || in_channels != out_channels_) {
     shortcut = register_module("shortcut", MakeConv(in_channels, out_channels_, 1, stride));
   }
+  if (group_norm) {
+    norm1 = register_module("norm1", MakeGroupNorm(conv1->options.out_channels()));
+    norm2 = register_module("norm2", MakeGroupNorm(conv2->options.out_channels()));
+    if (conv3) norm3 = register_module("norm3", MakeGroupNorm(out_channels_));
+    if (shortcut) norm_shortcut = register_module("norm_shortcut", MakeGroupNorm(out_channels_));
+  }
 }
 
 torch::Tensor ResidualUnitImpl::forward(const torch::Tensor& x) {
   auto act = [&](const torch::Tensor& t) { return Activate(t, activation_, leaky_slope_); };
-  torch::Tensor y = act(conv1->forward(x));
+  auto norm = [](torch::nn::GroupNorm& n, const torch::Tensor& t) { return n ? n->forward(t) : t; };
+  torch::Tensor y = act(norm(norm1, conv1->forward(x)));
   if (bottleneck_) {
-    y = act(conv2->forward(y));
-    y = conv3->forward(y);
+    y = act(norm(norm2, conv2->forward(y)));
+    y = norm(norm3, conv3->forward(y));
   } else {
-    y = conv2->forward(y);
+    y = norm(norm2, conv2->forward(y));
   }
-  const torch::Tensor identity = shortcut ? shortcut->forward(x) : x;
+  const torch::Tensor identity = shortcut ? norm(norm_shortcut, shortcut->forward(x)) : x;
   return act(y + identity);
 }
 
-ResNetEncoderImpl::ResNetEncoderImpl(int depth, double width_multiplier, int64_t input_channels) {
+ResNetEncoderImpl::ResNetEncoderImpl(int depth, double width_multiplier, int64_t input_channels, bool group_norm) {
   std::vector<int> blocks;
   bool bottleneck = false;
   if (depth == 18) {
@@ -50,12 +57,13 @@ ResNetEncoderImpl::ResNetEncoderImpl(int depth, double width_multiplier, int64_t
   }
   const int64_t stem = ScaledChannels(64, width_multiplier);
   conv1 = register_module("conv1", MakeConv(input_channels, stem, 7, 2));
+  if (group_norm) norm1 = register_module("norm1", MakeGroupNorm(stem));
   int64_t channels = stem;
   auto make_layer = [&](int index, int64_t planes, int64_t stride) {
     torch::nn::Sequential layer;
     for (int b = 0; b < blocks[index]; ++b) {
       ResidualUnit unit(channels, ScaledChannels(planes, width_multiplier), b == 0 ? stride : 1, bottleneck,
-                        Activation::kElu, 0.0);
+                        Activation::kElu, 0.0, group_norm);
       channels = unit->out_channels();
       layer->push_back(unit);
     }
@@ -75,7 +83,9 @@ ResNetEncoderImpl::ResNetEncoderImpl(int depth, double width_multiplier, int64_t
 
 EncoderFeatures ResNetEncoderImpl::forward(const torch::Tensor& x) {
   EncoderFeatures f;
-  const torch::Tensor c1 = torch::elu(conv1->forward(x));                       // 1/2
+  torch::Tensor stem_out = conv1->forward(x);
+  if (norm1) stem_out = norm1->forward(stem_out);
+  const torch::Tensor c1 = torch::elu(stem_out);                                // 1/2
   const torch::Tensor pooled = torch::max_pool2d(c1, {3, 3}, {2, 2}, {1, 1});   // 1/4
   const torch::Tensor l1 = layer1->forward(pooled);                             // 1/4
   const torch::Tensor l2 = layer2->forward(l1);                                 // 1/8

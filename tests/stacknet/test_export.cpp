@@ -26,7 +26,7 @@ TEST(Export, TracedModuleMatchesTheCppModuleAtTwoSizes) {
   {
     // Make the residual path non-trivial (its heads start at zero).
     torch::NoGradGuard no_grad;
-    for (auto& p : net->residual_net()->parameters()) p.add_(torch::randn_like(p) * 0.05);
+    for (auto& p : net->residual_net()->parameters()) p.add_(torch::randn_like(p) * 0.005);
   }
   net->eval();
   const std::string path = (fs::temp_directory_path() / ("dvso_export_" + std::to_string(::getpid()) + ".pt")).string();

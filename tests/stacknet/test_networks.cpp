@@ -2,7 +2,10 @@
 // input as defined in paper 3.1, and the stage-2 freezing of SimpleNet.
 #include <gtest/gtest.h>
 
+#include "core/error.h"
+#include "stacknet/layers.h"
 #include "stacknet/networks.h"
+#include "stacknet/resnet_encoder.h"
 #include "stacknet/trainer.h"
 #include "stacknet_test_util.h"
 
@@ -96,6 +99,63 @@ TEST(Networks, StageTwoTrainsResidualNetAndLeavesSimpleNetBitIdentical) {
   }
   EXPECT_EQ(changed, static_cast<int>(residual_after.size()));
   EXPECT_GT(net->residual_net()->named_parameters()["stem.weight"].grad().abs().sum().item<double>(), 0.0);
+}
+
+TEST(Networks, GroupNormUsesTheLargestDivisorUpToEightGroups) {
+  const std::vector<std::pair<int64_t, int64_t>> channels_groups{{3, 3}, {4, 4}, {8, 8}, {10, 5}, {12, 6}, {16, 8},
+                                                                 {128, 8}};
+  for (const auto& [channels, groups] : channels_groups) {
+    EXPECT_EQ(MakeGroupNorm(channels)->options.num_groups(), groups) << channels << " channels";
+  }
+}
+
+// Standard deviation of the 1/32 bottleneck of a freshly initialised ResNet-18 encoder.
+double BottleneckStd(bool group_norm) {
+  torch::manual_seed(3);
+  ResNetEncoder encoder(18, 0.25, 3, group_norm);
+  if (group_norm) InitConvolutionsHe(*encoder);
+  torch::NoGradGuard no_grad;
+  return encoder->forward(torch::randn({2, 3, 128, 256})).bottom.std().item<double>();
+}
+
+TEST(Networks, GroupNormKeepsTheEncoderSignalAliveAtInitialisation) {
+  // The reason for normalization "group" (options.h): without it, LibTorch's default
+  // initialisation shrinks the signal through the encoder's ~20 convolutions and the
+  // bottleneck is nearly constant; with GroupNorm + He init it stays at unit scale.
+  const double plain = BottleneckStd(false);
+  const double normalised = BottleneckStd(true);
+  EXPECT_GT(normalised, 0.3);
+  EXPECT_LT(normalised, 3.0);
+  EXPECT_LT(plain, 0.3 * normalised) << "plain " << plain << " normalised " << normalised;
+}
+
+TEST(Networks, NormalizationNoneBuildsThePlainEncoder) {
+  NetworkOptions options = testing::TinyNetwork();
+  auto count_norms = [](const torch::nn::Module& net) {
+    int norms = 0;
+    for (const auto& p : net.named_parameters()) norms += p.key().find("norm") != std::string::npos;
+    return norms;
+  };
+  EXPECT_GT(count_norms(*StackNet(options)), 0);
+  options.normalization = "none";
+  EXPECT_EQ(count_norms(*StackNet(options)), 0);
+  options.normalization = "batch";
+  EXPECT_THROW(options.Check(), Error);
+}
+
+TEST(Networks, SimpleNetStartsAtTheInitialDisparity) {
+  torch::manual_seed(4);
+  NetworkOptions options = testing::TinyNetwork();
+  options.initial_disparity = 0.03;
+  SimpleNet net(options);
+  torch::NoGradGuard no_grad;
+  const DisparityPyramid d = net->forward(torch::rand({2, 3, 32, 64}));
+  for (int s = 0; s < 4; ++s) {
+    EXPECT_NEAR(d.left[s].min().item<double>(), 0.03, 1e-6) << "scale " << s;
+    EXPECT_NEAR(d.right[s].max().item<double>(), 0.03, 1e-6) << "scale " << s;
+  }
+  options.initial_disparity = 0.4;  // above max_disparity (0.3)
+  EXPECT_THROW(options.Check(), Error);
 }
 
 }  // namespace
