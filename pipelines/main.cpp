@@ -19,6 +19,7 @@ int main(int argc, char** argv) {
   dvso::cli::AddEvalLabelsCommand(app);
   dvso::cli::AddAblationCommand(app);
   dvso::cli::AddTuneBaselineCommand(app);
+  dvso::cli::AddOxtsPosesCommand(app);
 #ifdef DVSO_WITH_TORCH
   dvso::cli::AddTrainCommand(app);
   dvso::cli::AddExportCommand(app);

@@ -1,0 +1,167 @@
+#include "core/kitti_oxts.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <map>
+#include <sstream>
+
+#include "core/error.h"
+#include "core/fs_util.h"
+
+namespace dvso {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr int kOxtsValues = 30;  // values per packet in the devkit's layout
+constexpr double kDegToRad = M_PI / 180.0;
+
+// "KEY: v1 v2 ..." lines of a KITTI calibration file; non-numeric values (calib_time) are skipped.
+std::map<std::string, std::vector<double>> ReadCalibrationFile(const std::string& path) {
+  std::ifstream in(path);
+  RequireFile(in.good(), path, "cannot open calibration file");
+  std::map<std::string, std::vector<double>> entries;
+  std::string line;
+  while (std::getline(in, line)) {
+    const size_t colon = line.find(':');
+    if (colon == std::string::npos) continue;
+    std::istringstream values(line.substr(colon + 1));
+    std::vector<double> numbers;
+    double v = 0.0;
+    while (values >> v) numbers.push_back(v);
+    if (values.eof() && !numbers.empty()) entries[line.substr(0, colon)] = numbers;
+  }
+  return entries;
+}
+
+const std::vector<double>& Entry(const std::map<std::string, std::vector<double>>& entries, const std::string& key,
+                                 size_t count, const std::string& path) {
+  const auto it = entries.find(key);
+  RequireFile(it != entries.end() && it->second.size() == count, path,
+              "needs a '" + key + ":' line with " + std::to_string(count) + " numbers");
+  return it->second;
+}
+
+Eigen::Matrix3d RowMajor3x3(const std::vector<double>& v) {
+  Eigen::Matrix3d m;
+  m << v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7], v[8];
+  return m;
+}
+
+// The calibration file `name`: in the drive folder, else in its parent (date folder).
+std::string FindCalibration(const std::string& drive_dir, const std::string& name) {
+  for (const fs::path& dir : {fs::path(drive_dir), fs::path(drive_dir).lexically_normal().parent_path()}) {
+    if (fs::exists(dir / name)) return (dir / name).string();
+  }
+  throw Error(drive_dir, "no " + name + " in the drive folder or its parent (KITTI raw date folder)");
+}
+
+}  // namespace
+
+OxtsPacket ReadOxtsPacket(const std::string& path) {
+  std::ifstream in(path);
+  RequireFile(in.good(), path, "cannot open OXTS packet");
+  std::vector<double> v;
+  double x = 0.0;
+  while (in >> x) v.push_back(x);
+  RequireFile(in.eof() && v.size() >= 6, path, "an OXTS packet needs >= 6 numbers (lat lon alt roll pitch yaw ...)");
+  OxtsPacket p;
+  p.lat = v[0], p.lon = v[1], p.alt = v[2], p.roll = v[3], p.pitch = v[4], p.yaw = v[5];
+  return p;
+}
+
+void WriteOxtsPacket(const std::string& path, const OxtsPacket& packet) {
+  WriteAtomically(path, [&](const std::string& tmp) {
+    std::ofstream out(tmp);
+    out << std::setprecision(17) << packet.lat << ' ' << packet.lon << ' ' << packet.alt << ' ' << packet.roll << ' '
+        << packet.pitch << ' ' << packet.yaw;
+    for (int i = 6; i < kOxtsValues; ++i) out << " 0";
+    out << '\n';
+    RequireFile(out.good(), path, "write failed");
+  });
+}
+
+double MercatorScale(double lat_deg) { return std::cos(lat_deg * kDegToRad); }
+
+Eigen::Isometry3d OxtsToPose(const OxtsPacket& p, double scale) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.translation() << scale * p.lon * M_PI * kEarthRadius / 180.0,
+      scale * kEarthRadius * std::log(std::tan((90.0 + p.lat) * M_PI / 360.0)), p.alt;
+  T.linear() = (Eigen::AngleAxisd(p.yaw, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(p.pitch, Eigen::Vector3d::UnitY()) *
+                Eigen::AngleAxisd(p.roll, Eigen::Vector3d::UnitX()))
+                   .toRotationMatrix();
+  return T;
+}
+
+OxtsPacket PoseToOxts(const Eigen::Isometry3d& T, double scale) {
+  OxtsPacket p;
+  const Eigen::Vector3d t = T.translation();
+  p.lon = t.x() * 180.0 / (scale * M_PI * kEarthRadius);
+  p.lat = std::atan(std::exp(t.y() / (scale * kEarthRadius))) * 360.0 / M_PI - 90.0;
+  p.alt = t.z();
+  // R = Rz(yaw) Ry(pitch) Rx(roll): R(2,0) = -sin(pitch), R(2,1) / R(2,2) = tan(roll), R(1,0) / R(0,0) = tan(yaw).
+  const Eigen::Matrix3d R = T.linear();
+  p.pitch = std::asin(std::clamp(-R(2, 0), -1.0, 1.0));
+  p.roll = std::atan2(R(2, 1), R(2, 2));
+  p.yaw = std::atan2(R(1, 0), R(0, 0));
+  return p;
+}
+
+Eigen::Isometry3d ReadRigidCalibration(const std::string& path) {
+  const auto entries = ReadCalibrationFile(path);
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = RowMajor3x3(Entry(entries, "R", 9, path));
+  const std::vector<double>& t = Entry(entries, "T", 3, path);
+  T.translation() << t[0], t[1], t[2];
+  RequireFile((T.linear() * T.linear().transpose() - Eigen::Matrix3d::Identity()).norm() < 1e-3, path,
+              "R is not a rotation");
+  return T;
+}
+
+Eigen::Isometry3d CameraFromImu(const std::string& calib_dir, int camera) {
+  Require(camera >= 0 && camera <= 3, "camera must be 0, 1, 2 or 3 (KITTI raw image_00..image_03)");
+  const std::string cam_to_cam = JoinPath(calib_dir, "calib_cam_to_cam.txt");
+  const auto entries = ReadCalibrationFile(cam_to_cam);
+  Eigen::Isometry3d rectify = Eigen::Isometry3d::Identity();
+  rectify.linear() = RowMajor3x3(Entry(entries, "R_rect_00", 9, cam_to_cam));
+  // Rectified camera X sits at -P(0,3)/P(0,0) along x of rectified camera 00 (P_rect_0X = K [I | t]).
+  const std::vector<double>& P = Entry(entries, "P_rect_0" + std::to_string(camera), 12, cam_to_cam);
+  RequireFile(P[0] > 0, cam_to_cam, "P_rect_0" + std::to_string(camera) + " has no positive focal length");
+  Eigen::Isometry3d shift = Eigen::Isometry3d::Identity();
+  shift.translation().x() = P[3] / P[0];
+  const Eigen::Isometry3d velo_from_imu = ReadRigidCalibration(JoinPath(calib_dir, "calib_imu_to_velo.txt"));
+  const Eigen::Isometry3d cam0_from_velo = ReadRigidCalibration(JoinPath(calib_dir, "calib_velo_to_cam.txt"));
+  return shift * rectify * cam0_from_velo * velo_from_imu;
+}
+
+std::vector<Eigen::Isometry3d> OxtsCameraPoses(const std::string& drive_dir, int camera) {
+  const fs::path data_dir = fs::path(drive_dir) / "oxts" / "data";
+  RequireFile(fs::is_directory(data_dir), data_dir.string(), "no OXTS folder (KITTI raw layout: DRIVE/oxts/data/)");
+  std::vector<std::string> files;
+  for (const auto& entry : fs::directory_iterator(data_dir)) {
+    if (entry.is_regular_file() && entry.path().extension() == ".txt") files.push_back(entry.path().string());
+  }
+  std::sort(files.begin(), files.end());
+  RequireFile(!files.empty(), data_dir.string(), "no OXTS packets (*.txt)");
+  // Every calibration file sits in the same folder (the date folder, or copied into the drive).
+  const std::string calib_dir = fs::path(FindCalibration(drive_dir, "calib_cam_to_cam.txt")).parent_path().string();
+  const Eigen::Isometry3d imu_from_camera = CameraFromImu(calib_dir, camera).inverse();
+  std::vector<Eigen::Isometry3d> poses;
+  poses.reserve(files.size());
+  double scale = 0.0;
+  Eigen::Isometry3d first_inverse = Eigen::Isometry3d::Identity();
+  for (size_t i = 0; i < files.size(); ++i) {
+    const OxtsPacket packet = ReadOxtsPacket(files[i]);
+    if (i == 0) scale = MercatorScale(packet.lat);
+    const Eigen::Isometry3d T_world_camera = OxtsToPose(packet, scale) * imu_from_camera;
+    if (i == 0) first_inverse = T_world_camera.inverse();
+    poses.push_back(first_inverse * T_world_camera);
+  }
+  return poses;
+}
+
+}  // namespace dvso

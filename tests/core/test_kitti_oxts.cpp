@@ -1,0 +1,185 @@
+// OXTS -> camera poses (core/kitti_oxts.h): the devkit's Mercator formulas by
+// hand, the packet <-> pose round trip, and a synthetic raw drive (calibration
+// files in the date folder, packets written from known camera poses) read back
+// through the library and through `dvso oxts-poses`.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+#include "core/error.h"
+#include "core/kitti_oxts.h"
+#include "core/trajectory.h"
+#include "tests/dvso_cli_runner.h"
+
+namespace fs = std::filesystem;
+
+namespace dvso {
+namespace {
+
+struct TempDir {
+  fs::path path;
+  explicit TempDir(const std::string& name)
+      : path(fs::temp_directory_path() / ("dvso_oxts_" + name + "_" + std::to_string(::getpid()))) {
+    fs::remove_all(path);
+    fs::create_directories(path);
+  }
+  ~TempDir() { fs::remove_all(path); }
+};
+
+TEST(KittiOxts, MercatorFormulasByHand) {
+  EXPECT_DOUBLE_EQ(MercatorScale(0.0), 1.0);
+  EXPECT_NEAR(MercatorScale(60.0), 0.5, 1e-12);
+  OxtsPacket p;
+  p.lon = 1.0;  // one degree of longitude on the equator: pi * r / 180
+  p.alt = 5.0;
+  p.yaw = M_PI / 2;
+  const Eigen::Isometry3d T = OxtsToPose(p, 1.0);
+  EXPECT_NEAR(T.translation().x(), 111319.490793, 1e-5);
+  EXPECT_NEAR(T.translation().y(), 0.0, 1e-9);  // ln(tan(45 deg)) = 0
+  EXPECT_DOUBLE_EQ(T.translation().z(), 5.0);
+  EXPECT_TRUE(T.linear().col(0).isApprox(Eigen::Vector3d::UnitY(), 1e-12));  // yaw 90 deg: x forward -> y
+  // Latitude 45 deg at scale 0.5: y = 0.5 r ln(tan(67.5 deg)).
+  p = OxtsPacket{};
+  p.lat = 45.0;
+  EXPECT_NEAR(OxtsToPose(p, 0.5).translation().y(), 0.5 * kEarthRadius * std::log(std::tan(67.5 * M_PI / 180)), 1e-6);
+}
+
+TEST(KittiOxts, PacketPoseRoundTrip) {
+  const double scale = MercatorScale(49.0);
+  for (const auto& angles : {Eigen::Vector3d(0.01, -0.02, 1.3), Eigen::Vector3d(-0.2, 0.4, -2.9),
+                             Eigen::Vector3d(0.0, 0.0, 0.0)}) {
+    OxtsPacket p;
+    p.lat = 49.0112, p.lon = 8.4173, p.alt = 115.3, p.roll = angles.x(), p.pitch = angles.y(), p.yaw = angles.z();
+    const OxtsPacket q = PoseToOxts(OxtsToPose(p, scale), scale);
+    EXPECT_NEAR(q.lat, p.lat, 1e-10);
+    EXPECT_NEAR(q.lon, p.lon, 1e-10);
+    EXPECT_NEAR(q.alt, p.alt, 1e-9);
+    EXPECT_NEAR(q.roll, p.roll, 1e-12);
+    EXPECT_NEAR(q.pitch, p.pitch, 1e-12);
+    EXPECT_NEAR(q.yaw, p.yaw, 1e-12);
+  }
+}
+
+Eigen::Isometry3d Rigid(const Eigen::Matrix3d& R, const Eigen::Vector3d& t) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = R;
+  T.translation() = t;
+  return T;
+}
+
+void WriteRigid(const fs::path& path, const Eigen::Isometry3d& T) {
+  std::ofstream out(path);
+  out.precision(17);
+  out << "calib_time: 25-May-2012 16:47:16\nR:";
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) out << ' ' << T.linear()(r, c);
+  out << "\nT: " << T.translation().x() << ' ' << T.translation().y() << ' ' << T.translation().z() << '\n';
+}
+
+// A raw date folder with KITTI-like calibration; returns T_camrect2_imu as written.
+Eigen::Isometry3d WriteDateFolderCalibration(const fs::path& date_dir) {
+  const Eigen::Isometry3d velo_from_imu =
+      Rigid(Eigen::AngleAxisd(0.01, Eigen::Vector3d::UnitZ()).toRotationMatrix(), {-0.81, 0.32, -0.80});
+  Eigen::Matrix3d axes;  // velodyne x forward, y left, z up -> camera x right, y down, z forward
+  axes << 0, -1, 0, 0, 0, -1, 1, 0, 0;
+  const Eigen::Isometry3d cam0_from_velo =
+      Rigid(Eigen::AngleAxisd(0.02, Eigen::Vector3d::UnitX()).toRotationMatrix() * axes, {-0.004, -0.076, -0.27});
+  const Eigen::Matrix3d rect = Eigen::AngleAxisd(0.005, Eigen::Vector3d(0.3, 1, 0.2).normalized()).toRotationMatrix();
+  WriteRigid(date_dir / "calib_imu_to_velo.txt", velo_from_imu);
+  WriteRigid(date_dir / "calib_velo_to_cam.txt", cam0_from_velo);
+  std::ofstream out(date_dir / "calib_cam_to_cam.txt");
+  out.precision(17);
+  out << "calib_time: 09-Jan-2012 13:57:47\ncorner_dist: 9.950000e-02\nR_rect_00:";
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) out << ' ' << rect(r, c);
+  // fx 721.5377, camera 02 is 0.06 m to the left of rectified camera 00: P(0,3) = fx * 0.06.
+  out << "\nP_rect_00: 721.5377 0 609.5593 0 0 721.5377 172.854 0 0 0 1 0\n"
+      << "P_rect_02: 721.5377 0 609.5593 44.85728 0 721.5377 172.854 0.2163791 0 0 1 0.002745884\n";
+  Eigen::Isometry3d shift = Eigen::Isometry3d::Identity();
+  shift.translation().x() = 44.85728 / 721.5377;
+  return shift * Rigid(rect, Eigen::Vector3d::Zero()) * cam0_from_velo * velo_from_imu;
+}
+
+TEST(KittiOxts, SyntheticDriveRoundTripsThroughCalibrationAndCli) {
+  TempDir tmp("drive");
+  const fs::path drive = tmp.path / "2011_09_26_drive_0001_sync";
+  fs::create_directories(drive / "oxts" / "data");
+  const Eigen::Isometry3d camera_from_imu = WriteDateFolderCalibration(tmp.path);
+  EXPECT_TRUE(CameraFromImu(tmp.path.string(), 2).isApprox(camera_from_imu, 1e-12));
+
+  // Camera 02 moves forward 1 m per frame while turning and bobbing; the world is placed at
+  // Karlsruhe (lat 49.01, lon 8.42) in the Mercator frame of the first packet's scale.
+  const double scale = MercatorScale(49.01);
+  OxtsPacket origin;
+  origin.lat = 49.01, origin.lon = 8.42, origin.alt = 115.0, origin.yaw = 0.7;
+  // Camera frame (y down, z forward) -> IMU-like world axes (z up) for the first camera.
+  Eigen::Matrix3d cam_to_up;
+  cam_to_up << 0, 0, 1, -1, 0, 0, 0, -1, 0;
+  const Eigen::Isometry3d mercator_from_world = OxtsToPose(origin, scale) * Rigid(cam_to_up, Eigen::Vector3d::Zero());
+  std::vector<Eigen::Isometry3d> world_from_camera;
+  constexpr int kFrames = 40;
+  for (int i = 0; i < kFrames; ++i) {
+    const Eigen::Matrix3d R = (Eigen::AngleAxisd(0.02 * i, Eigen::Vector3d::UnitY()) *
+                               Eigen::AngleAxisd(0.01 * std::sin(0.3 * i), Eigen::Vector3d::UnitX()))
+                                  .toRotationMatrix();
+    world_from_camera.push_back(Rigid(R, {5.0 * std::sin(0.02 * i), 0.05 * std::sin(0.5 * i), 1.0 * i}));
+    const Eigen::Isometry3d mercator_from_imu = mercator_from_world * world_from_camera.back() * camera_from_imu;
+    char name[32];
+    std::snprintf(name, sizeof(name), "%010d.txt", i);
+    WriteOxtsPacket((drive / "oxts" / "data" / name).string(), PoseToOxts(mercator_from_imu, scale));
+  }
+
+  const std::vector<Eigen::Isometry3d> poses = OxtsCameraPoses(drive.string(), 2);
+  ASSERT_EQ(poses.size(), static_cast<size_t>(kFrames));
+  double worst = 0.0;
+  for (int i = 0; i < kFrames; ++i) {
+    const Eigen::Isometry3d expected = world_from_camera[0].inverse() * world_from_camera[i];
+    worst = std::max(worst, (poses[i].translation() - expected.translation()).norm());
+    EXPECT_TRUE(poses[i].linear().isApprox(expected.linear(), 1e-9)) << "frame " << i;
+  }
+  EXPECT_LT(worst, 1e-5) << "m";  // ~4e-6 m: atan(exp(y / r)) of a y of ~5.6e6 m in doubles
+  // Camera 00 differs from 02 by the rectified baseline offset only (0.06 m along x).
+  const std::vector<Eigen::Isometry3d> grey = OxtsCameraPoses(drive.string(), 0);
+  EXPECT_NEAR((grey[10].translation() - poses[10].translation()).norm(), 0.0, 0.2);
+  EXPECT_GT((grey[10].translation() - poses[10].translation()).norm(), 1e-4);
+
+  // The CLI writes the same poses as a KITTI file.
+  const std::string out = (tmp.path / "poses.txt").string();
+  const testing::CliRun run = testing::RunDvso("oxts-poses --sequence " + drive.string() + " --camera 2 --out " + out);
+  ASSERT_EQ(run.exit_code, 0) << run.out;
+  const Trajectory written = ReadTrajectory(out);
+  ASSERT_EQ(written.size(), static_cast<size_t>(kFrames));
+  EXPECT_LT((written.poses[kFrames - 1].T_world_camera.translation() - poses[kFrames - 1].translation()).norm(), 1e-9);
+}
+
+TEST(KittiOxts, BadInputIsOneClearError) {
+  TempDir tmp("bad");
+  const fs::path drive = tmp.path / "drive_sync";
+  fs::create_directories(drive / "oxts" / "data");
+  std::ofstream(drive / "oxts" / "data" / "0000000000.txt") << "49.0 8.4 115\n";  // 3 numbers only
+  WriteDateFolderCalibration(tmp.path);
+  try {
+    OxtsCameraPoses(drive.string(), 0);
+    FAIL() << "a short packet must throw";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("0000000000.txt"), std::string::npos) << e.what();
+  }
+  fs::remove(tmp.path / "calib_velo_to_cam.txt");
+  std::ofstream(drive / "oxts" / "data" / "0000000000.txt") << "49.0 8.4 115 0 0 0\n";
+  try {
+    OxtsCameraPoses(drive.string(), 0);
+    FAIL() << "a missing calibration file must throw";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("calib_velo_to_cam.txt"), std::string::npos) << e.what();
+  }
+  const testing::CliRun run = testing::RunDvso("oxts-poses --sequence " + (tmp.path / "nothing").string() + " --out " +
+                                               (tmp.path / "p.txt").string());
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_NE(run.out.find("dvso: error:"), std::string::npos) << run.out;
+  EXPECT_FALSE(fs::exists(tmp.path / "p.txt"));
+}
+
+}  // namespace
+}  // namespace dvso
