@@ -5,11 +5,11 @@
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
-#include <map>
 #include <sstream>
 
 #include "core/error.h"
 #include "core/fs_util.h"
+#include "core/kitti_raw_calibration.h"
 
 namespace dvso {
 
@@ -19,46 +19,6 @@ namespace {
 
 constexpr int kOxtsValues = 30;  // values per packet in the devkit's layout
 constexpr double kDegToRad = M_PI / 180.0;
-
-// "KEY: v1 v2 ..." lines of a KITTI calibration file; non-numeric values (calib_time) are skipped.
-std::map<std::string, std::vector<double>> ReadCalibrationFile(const std::string& path) {
-  std::ifstream in(path);
-  RequireFile(in.good(), path, "cannot open calibration file");
-  std::map<std::string, std::vector<double>> entries;
-  std::string line;
-  while (std::getline(in, line)) {
-    const size_t colon = line.find(':');
-    if (colon == std::string::npos) continue;
-    std::istringstream values(line.substr(colon + 1));
-    std::vector<double> numbers;
-    double v = 0.0;
-    while (values >> v) numbers.push_back(v);
-    if (values.eof() && !numbers.empty()) entries[line.substr(0, colon)] = numbers;
-  }
-  return entries;
-}
-
-const std::vector<double>& Entry(const std::map<std::string, std::vector<double>>& entries, const std::string& key,
-                                 size_t count, const std::string& path) {
-  const auto it = entries.find(key);
-  RequireFile(it != entries.end() && it->second.size() == count, path,
-              "needs a '" + key + ":' line with " + std::to_string(count) + " numbers");
-  return it->second;
-}
-
-Eigen::Matrix3d RowMajor3x3(const std::vector<double>& v) {
-  Eigen::Matrix3d m;
-  m << v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7], v[8];
-  return m;
-}
-
-// The calibration file `name`: in the drive folder, else in its parent (date folder).
-std::string FindCalibration(const std::string& drive_dir, const std::string& name) {
-  for (const fs::path& dir : {fs::path(drive_dir), fs::path(drive_dir).lexically_normal().parent_path()}) {
-    if (fs::exists(dir / name)) return (dir / name).string();
-  }
-  throw Error(drive_dir, "no " + name + " in the drive folder or its parent (KITTI raw date folder)");
-}
 
 }  // namespace
 
@@ -111,25 +71,14 @@ OxtsPacket PoseToOxts(const Eigen::Isometry3d& T, double scale) {
   return p;
 }
 
-Eigen::Isometry3d ReadRigidCalibration(const std::string& path) {
-  const auto entries = ReadCalibrationFile(path);
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.linear() = RowMajor3x3(Entry(entries, "R", 9, path));
-  const std::vector<double>& t = Entry(entries, "T", 3, path);
-  T.translation() << t[0], t[1], t[2];
-  RequireFile((T.linear() * T.linear().transpose() - Eigen::Matrix3d::Identity()).norm() < 1e-3, path,
-              "R is not a rotation");
-  return T;
-}
-
 Eigen::Isometry3d CameraFromImu(const std::string& calib_dir, int camera) {
   Require(camera >= 0 && camera <= 3, "camera must be 0, 1, 2 or 3 (KITTI raw image_00..image_03)");
   const std::string cam_to_cam = JoinPath(calib_dir, "calib_cam_to_cam.txt");
-  const auto entries = ReadCalibrationFile(cam_to_cam);
+  const KittiCalibration entries = ReadKittiCalibration(cam_to_cam);
   Eigen::Isometry3d rectify = Eigen::Isometry3d::Identity();
-  rectify.linear() = RowMajor3x3(Entry(entries, "R_rect_00", 9, cam_to_cam));
+  rectify.linear() = RowMajor3x3(CalibrationEntry(entries, "R_rect_00", 9, cam_to_cam));
   // Rectified camera X sits at -P(0,3)/P(0,0) along x of rectified camera 00 (P_rect_0X = K [I | t]).
-  const std::vector<double>& P = Entry(entries, "P_rect_0" + std::to_string(camera), 12, cam_to_cam);
+  const std::vector<double>& P = CalibrationEntry(entries, "P_rect_0" + std::to_string(camera), 12, cam_to_cam);
   RequireFile(P[0] > 0, cam_to_cam, "P_rect_0" + std::to_string(camera) + " has no positive focal length");
   Eigen::Isometry3d shift = Eigen::Isometry3d::Identity();
   shift.translation().x() = P[3] / P[0];
@@ -148,7 +97,7 @@ std::vector<Eigen::Isometry3d> OxtsCameraPoses(const std::string& drive_dir, int
   std::sort(files.begin(), files.end());
   RequireFile(!files.empty(), data_dir.string(), "no OXTS packets (*.txt)");
   // Every calibration file sits in the same folder (the date folder, or copied into the drive).
-  const std::string calib_dir = fs::path(FindCalibration(drive_dir, "calib_cam_to_cam.txt")).parent_path().string();
+  const std::string calib_dir = FindRawCalibrationDir(drive_dir);
   const Eigen::Isometry3d imu_from_camera = CameraFromImu(calib_dir, camera).inverse();
   std::vector<Eigen::Isometry3d> poses;
   poses.reserve(files.size());

@@ -44,10 +44,6 @@ Eigen::Isometry3d OxtsToPose(const OxtsPacket& packet, double scale);
 // Inverse of OxtsToPose (R = Rz(yaw) Ry(pitch) Rx(roll), |pitch| < pi/2).
 OxtsPacket PoseToOxts(const Eigen::Isometry3d& T_world_imu, double scale);
 
-// "R: 9 values" + "T: 3 values" rigid calibration (calib_imu_to_velo.txt, calib_velo_to_cam.txt):
-// returns T_to_from (maps points of the "from" sensor into the "to" sensor).
-Eigen::Isometry3d ReadRigidCalibration(const std::string& path);
-
 // T_camrect_imu of rectified camera `camera` (0..3) of a raw date folder's calibration files.
 Eigen::Isometry3d CameraFromImu(const std::string& calib_dir, int camera);
 

@@ -20,6 +20,7 @@ int main(int argc, char** argv) {
   dvso::cli::AddAblationCommand(app);
   dvso::cli::AddTuneBaselineCommand(app);
   dvso::cli::AddOxtsPosesCommand(app);
+  dvso::cli::AddGtDepthCommand(app);
 #ifdef DVSO_WITH_TORCH
   dvso::cli::AddTrainCommand(app);
   dvso::cli::AddExportCommand(app);

@@ -11,6 +11,7 @@
 #include "core/error.h"
 #include "core/kitti_oxts.h"
 #include "core/trajectory.h"
+#include "tests/core/kitti_raw_test_util.h"
 #include "tests/dvso_cli_runner.h"
 
 namespace fs = std::filesystem;
@@ -62,51 +63,18 @@ TEST(KittiOxts, PacketPoseRoundTrip) {
   }
 }
 
-Eigen::Isometry3d Rigid(const Eigen::Matrix3d& R, const Eigen::Vector3d& t) {
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.linear() = R;
-  T.translation() = t;
-  return T;
-}
-
-void WriteRigid(const fs::path& path, const Eigen::Isometry3d& T) {
-  std::ofstream out(path);
-  out.precision(17);
-  out << "calib_time: 25-May-2012 16:47:16\nR:";
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) out << ' ' << T.linear()(r, c);
-  out << "\nT: " << T.translation().x() << ' ' << T.translation().y() << ' ' << T.translation().z() << '\n';
-}
-
-// A raw date folder with KITTI-like calibration; returns T_camrect2_imu as written.
-Eigen::Isometry3d WriteDateFolderCalibration(const fs::path& date_dir) {
-  const Eigen::Isometry3d velo_from_imu =
-      Rigid(Eigen::AngleAxisd(0.01, Eigen::Vector3d::UnitZ()).toRotationMatrix(), {-0.81, 0.32, -0.80});
-  Eigen::Matrix3d axes;  // velodyne x forward, y left, z up -> camera x right, y down, z forward
-  axes << 0, -1, 0, 0, 0, -1, 1, 0, 0;
-  const Eigen::Isometry3d cam0_from_velo =
-      Rigid(Eigen::AngleAxisd(0.02, Eigen::Vector3d::UnitX()).toRotationMatrix() * axes, {-0.004, -0.076, -0.27});
-  const Eigen::Matrix3d rect = Eigen::AngleAxisd(0.005, Eigen::Vector3d(0.3, 1, 0.2).normalized()).toRotationMatrix();
-  WriteRigid(date_dir / "calib_imu_to_velo.txt", velo_from_imu);
-  WriteRigid(date_dir / "calib_velo_to_cam.txt", cam0_from_velo);
-  std::ofstream out(date_dir / "calib_cam_to_cam.txt");
-  out.precision(17);
-  out << "calib_time: 09-Jan-2012 13:57:47\ncorner_dist: 9.950000e-02\nR_rect_00:";
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) out << ' ' << rect(r, c);
-  // fx 721.5377, camera 02 is 0.06 m to the left of rectified camera 00: P(0,3) = fx * 0.06.
-  out << "\nP_rect_00: 721.5377 0 609.5593 0 0 721.5377 172.854 0 0 0 1 0\n"
-      << "P_rect_02: 721.5377 0 609.5593 44.85728 0 721.5377 172.854 0.2163791 0 0 1 0.002745884\n";
+// T_camrect2_imu of the calibration written by WriteRawCalibration, composed by hand.
+Eigen::Isometry3d CameraTwoFromImu(const testing::RawCalibration& c) {
   Eigen::Isometry3d shift = Eigen::Isometry3d::Identity();
-  shift.translation().x() = 44.85728 / 721.5377;
-  return shift * Rigid(rect, Eigen::Vector3d::Zero()) * cam0_from_velo * velo_from_imu;
+  shift.translation().x() = c.camera2_offset_x;
+  return shift * testing::Rigid(c.rect, Eigen::Vector3d::Zero()) * c.cam0_from_velo * c.velo_from_imu;
 }
 
 TEST(KittiOxts, SyntheticDriveRoundTripsThroughCalibrationAndCli) {
   TempDir tmp("drive");
   const fs::path drive = tmp.path / "2011_09_26_drive_0001_sync";
   fs::create_directories(drive / "oxts" / "data");
-  const Eigen::Isometry3d camera_from_imu = WriteDateFolderCalibration(tmp.path);
+  const Eigen::Isometry3d camera_from_imu = CameraTwoFromImu(testing::WriteRawCalibration(tmp.path));
   EXPECT_TRUE(CameraFromImu(tmp.path.string(), 2).isApprox(camera_from_imu, 1e-12));
 
   // Camera 02 moves forward 1 m per frame while turning and bobbing; the world is placed at
@@ -117,14 +85,14 @@ TEST(KittiOxts, SyntheticDriveRoundTripsThroughCalibrationAndCli) {
   // Camera frame (y down, z forward) -> IMU-like world axes (z up) for the first camera.
   Eigen::Matrix3d cam_to_up;
   cam_to_up << 0, 0, 1, -1, 0, 0, 0, -1, 0;
-  const Eigen::Isometry3d mercator_from_world = OxtsToPose(origin, scale) * Rigid(cam_to_up, Eigen::Vector3d::Zero());
+  const Eigen::Isometry3d mercator_from_world = OxtsToPose(origin, scale) * testing::Rigid(cam_to_up, Eigen::Vector3d::Zero());
   std::vector<Eigen::Isometry3d> world_from_camera;
   constexpr int kFrames = 40;
   for (int i = 0; i < kFrames; ++i) {
     const Eigen::Matrix3d R = (Eigen::AngleAxisd(0.02 * i, Eigen::Vector3d::UnitY()) *
                                Eigen::AngleAxisd(0.01 * std::sin(0.3 * i), Eigen::Vector3d::UnitX()))
                                   .toRotationMatrix();
-    world_from_camera.push_back(Rigid(R, {5.0 * std::sin(0.02 * i), 0.05 * std::sin(0.5 * i), 1.0 * i}));
+    world_from_camera.push_back(testing::Rigid(R, {5.0 * std::sin(0.02 * i), 0.05 * std::sin(0.5 * i), 1.0 * i}));
     const Eigen::Isometry3d mercator_from_imu = mercator_from_world * world_from_camera.back() * camera_from_imu;
     char name[32];
     std::snprintf(name, sizeof(name), "%010d.txt", i);
@@ -159,7 +127,7 @@ TEST(KittiOxts, BadInputIsOneClearError) {
   const fs::path drive = tmp.path / "drive_sync";
   fs::create_directories(drive / "oxts" / "data");
   std::ofstream(drive / "oxts" / "data" / "0000000000.txt") << "49.0 8.4 115\n";  // 3 numbers only
-  WriteDateFolderCalibration(tmp.path);
+  testing::WriteRawCalibration(tmp.path);
   try {
     OxtsCameraPoses(drive.string(), 0);
     FAIL() << "a short packet must throw";

@@ -1,0 +1,78 @@
+#include "core/kitti_velodyne.h"
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+#include "core/error.h"
+#include "core/fs_util.h"
+#include "core/kitti_raw_calibration.h"
+
+namespace dvso {
+
+namespace {
+// Points closer than this ahead of the Velodyne (m, along its x axis) are dropped: behind the
+// cameras or on the car itself (monodepth's generate_depth_map uses the same 0 m test on x >= 0).
+constexpr float kMinForward = 0.0f;
+constexpr int kFloatsPerPoint = 4;
+}  // namespace
+
+std::vector<VelodynePoint> ReadVelodyneScan(const std::string& path) {
+  std::ifstream in(path, std::ios::binary | std::ios::ate);
+  RequireFile(in.good(), path, "cannot open Velodyne scan");
+  const std::streamsize bytes = in.tellg();
+  constexpr std::streamsize kPointBytes = kFloatsPerPoint * sizeof(float);
+  RequireFile(bytes >= 0 && bytes % kPointBytes == 0, path,
+              "a Velodyne .bin scan holds float32 x y z reflectance quadruples (size not a multiple of 16 bytes)");
+  std::vector<VelodynePoint> points(static_cast<size_t>(bytes / kPointBytes));
+  in.seekg(0);
+  in.read(reinterpret_cast<char*>(points.data()), bytes);
+  RequireFile(in.good() || bytes == 0, path, "read failed");
+  return points;
+}
+
+void WriteVelodyneScan(const std::string& path, const std::vector<VelodynePoint>& points) {
+  WriteAtomically(path, [&](const std::string& tmp) {
+    std::ofstream out(tmp, std::ios::binary);
+    out.write(reinterpret_cast<const char*>(points.data()),
+              static_cast<std::streamsize>(points.size() * kFloatsPerPoint * sizeof(float)));
+    RequireFile(out.good(), path, "write failed");
+  });
+}
+
+VelodyneProjection ReadVelodyneProjection(const std::string& calib_dir, int camera) {
+  Require(camera >= 0 && camera <= 3, "camera must be 0, 1, 2 or 3 (KITTI raw image_00..image_03)");
+  const std::string cam_to_cam = JoinPath(calib_dir, "calib_cam_to_cam.txt");
+  const KittiCalibration c = ReadKittiCalibration(cam_to_cam);
+  const std::string id = "0" + std::to_string(camera);
+  Eigen::Matrix4d rectify = Eigen::Matrix4d::Identity();
+  rectify.topLeftCorner<3, 3>() = RowMajor3x3(CalibrationEntry(c, "R_rect_00", 9, cam_to_cam));
+  const std::vector<double>& p = CalibrationEntry(c, "P_rect_" + id, 12, cam_to_cam);
+  Eigen::Matrix<double, 3, 4> P;
+  P << p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11];
+  const std::vector<double>& size = CalibrationEntry(c, "S_rect_" + id, 2, cam_to_cam);
+  VelodyneProjection projection;
+  projection.width = static_cast<int>(std::lround(size[0]));
+  projection.height = static_cast<int>(std::lround(size[1]));
+  RequireFile(projection.width > 0 && projection.height > 0, cam_to_cam, "S_rect_" + id + " is not an image size");
+  const Eigen::Matrix4d cam0_from_velo =
+      ReadRigidCalibration(JoinPath(calib_dir, "calib_velo_to_cam.txt")).matrix();
+  projection.velo_to_image = P * rectify * cam0_from_velo;
+  return projection;
+}
+
+cv::Mat ProjectVelodyneDepth(const std::vector<VelodynePoint>& points, const VelodyneProjection& projection) {
+  cv::Mat depth(projection.height, projection.width, CV_32F, cv::Scalar(0));
+  for (const VelodynePoint& point : points) {
+    if (!(point.x() >= kMinForward)) continue;
+    const Eigen::Vector3d x = projection.velo_to_image * Eigen::Vector4d(point.x(), point.y(), point.z(), 1.0);
+    if (!(x.z() > 0)) continue;
+    const long u = std::lround(x.x() / x.z()), v = std::lround(x.y() / x.z());
+    if (u < 0 || v < 0 || u >= projection.width || v >= projection.height) continue;
+    float& d = depth.at<float>(static_cast<int>(v), static_cast<int>(u));
+    if (d == 0 || x.z() < d) d = static_cast<float>(x.z());
+  }
+  return depth;
+}
+
+}  // namespace dvso

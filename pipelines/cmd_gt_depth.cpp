@@ -1,0 +1,72 @@
+// `dvso gt-depth`: sparse depth ground truth of a KITTI raw drive, its Velodyne
+// scans projected into a rectified camera (core/kitti_velodyne.h), one KITTI
+// depth PNG (m * 256, 0 = none) per scan, named like the scan.
+#include <algorithm>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+
+#include "core/disparity_io.h"
+#include "core/error.h"
+#include "core/fs_util.h"
+#include "core/kitti_raw_calibration.h"
+#include "core/kitti_velodyne.h"
+#include "core/progress.h"
+#include "pipelines/commands.h"
+
+namespace dvso::cli {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct GtDepthArgs {
+  std::string drive_dir, out_dir;
+  int camera = 2;
+  bool quiet = false;
+};
+
+void Run(const GtDepthArgs& args) {
+  const fs::path scans_dir = fs::path(args.drive_dir) / "velodyne_points" / "data";
+  RequireFile(fs::is_directory(scans_dir), scans_dir.string(),
+              "no Velodyne folder (KITTI raw layout: DRIVE/velodyne_points/data/*.bin)");
+  std::vector<fs::path> scans;
+  for (const auto& entry : fs::directory_iterator(scans_dir)) {
+    if (entry.is_regular_file() && entry.path().extension() == ".bin") scans.push_back(entry.path());
+  }
+  std::sort(scans.begin(), scans.end());
+  RequireFile(!scans.empty(), scans_dir.string(), "no .bin scans (the extract drives' text scans are not read yet)");
+  const VelodyneProjection projection = ReadVelodyneProjection(FindRawCalibrationDir(args.drive_dir), args.camera);
+  EnsureDirectory(args.out_dir);
+  ProgressBar progress("gt-depth", static_cast<long>(scans.size()));
+  long points = 0;
+  for (size_t i = 0; i < scans.size(); ++i) {
+    const cv::Mat depth = ProjectVelodyneDepth(ReadVelodyneScan(scans[i].string()), projection);
+    points += cv::countNonZero(depth);
+    WriteKittiMapPng(JoinPath(args.out_dir, scans[i].stem().string() + ".png"), depth);
+    if (!args.quiet) progress.Update(static_cast<long>(i + 1));
+  }
+  if (!args.quiet) progress.Finish();
+  std::cout << scans.size() << " depth maps (" << projection.width << "x" << projection.height << ", camera "
+            << args.camera << ", " << points / static_cast<long>(scans.size()) << " points/frame) in " << args.out_dir
+            << "\n";
+}
+
+}  // namespace
+
+void AddGtDepthCommand(CLI::App& app) {
+  auto args = std::make_shared<GtDepthArgs>();
+  auto* cmd = app.add_subcommand(
+      "gt-depth",
+      "KITTI raw drive: Velodyne scans projected into a rectified camera (nearest point per pixel, points behind "
+      "dropped) as KITTI depth PNGs (m * 256), the Eigen-split depth GT of monodepth's generate_depth_map "
+      "(0-based pixels: monodepth's maps are shifted by one pixel left and up)");
+  cmd->add_option("--sequence", args->drive_dir, "drive folder with velodyne_points/data/*.bin")->required();
+  cmd->add_option("--out", args->out_dir, "output folder (one PNG per scan, named like it)")->required();
+  cmd->add_option("--camera", args->camera, "rectified camera: 2 (colour left, the network's) or 0 (grey left)")
+      ->capture_default_str();
+  cmd->add_flag("--quiet", args->quiet, "no progress bar");
+  cmd->callback([args] { Run(*args); });
+}
+
+}  // namespace dvso::cli

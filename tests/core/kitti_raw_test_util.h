@@ -1,0 +1,60 @@
+// A KITTI raw date folder's calibration files with KITTI-like values, written for tests of the
+// raw readers (OXTS poses, Velodyne depth).
+#pragma once
+
+#include <Eigen/Geometry>
+#include <filesystem>
+#include <fstream>
+
+namespace dvso::testing {
+
+inline Eigen::Isometry3d Rigid(const Eigen::Matrix3d& R, const Eigen::Vector3d& t) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = R;
+  T.translation() = t;
+  return T;
+}
+
+inline void WriteRigidCalibration(const std::filesystem::path& path, const Eigen::Isometry3d& T) {
+  std::ofstream out(path);
+  out.precision(17);
+  out << "calib_time: 25-May-2012 16:47:16\nR:";
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) out << ' ' << T.linear()(r, c);
+  out << "\nT: " << T.translation().x() << ' ' << T.translation().y() << ' ' << T.translation().z() << '\n';
+}
+
+struct RawCalibration {
+  Eigen::Isometry3d velo_from_imu, cam0_from_velo;
+  Eigen::Matrix3d rect;                 // R_rect_00
+  Eigen::Matrix<double, 3, 4> P_rect_02;
+  double fx = 721.5377;
+  double camera2_offset_x = 44.85728 / 721.5377;  // P_rect_02(0,3) / fx
+};
+
+// Writes calib_imu_to_velo.txt, calib_velo_to_cam.txt and calib_cam_to_cam.txt (1242x375 rectified).
+inline RawCalibration WriteRawCalibration(const std::filesystem::path& dir) {
+  RawCalibration c;
+  c.velo_from_imu = Rigid(Eigen::AngleAxisd(0.01, Eigen::Vector3d::UnitZ()).toRotationMatrix(), {-0.81, 0.32, -0.80});
+  Eigen::Matrix3d axes;  // Velodyne x forward, y left, z up -> camera x right, y down, z forward
+  axes << 0, -1, 0, 0, 0, -1, 1, 0, 0;
+  c.cam0_from_velo =
+      Rigid(Eigen::AngleAxisd(0.02, Eigen::Vector3d::UnitX()).toRotationMatrix() * axes, {-0.004, -0.076, -0.27});
+  c.rect = Eigen::AngleAxisd(0.005, Eigen::Vector3d(0.3, 1, 0.2).normalized()).toRotationMatrix();
+  c.P_rect_02 << c.fx, 0, 609.5593, 44.85728, 0, c.fx, 172.854, 0.2163791, 0, 0, 1, 0.002745884;
+  WriteRigidCalibration(dir / "calib_imu_to_velo.txt", c.velo_from_imu);
+  WriteRigidCalibration(dir / "calib_velo_to_cam.txt", c.cam0_from_velo);
+  std::ofstream out(dir / "calib_cam_to_cam.txt");
+  out.precision(17);
+  out << "calib_time: 09-Jan-2012 13:57:47\ncorner_dist: 9.950000e-02\nR_rect_00:";
+  for (int r = 0; r < 3; ++r)
+    for (int col = 0; col < 3; ++col) out << ' ' << c.rect(r, col);
+  out << "\nS_rect_00: 1.242000e+03 3.750000e+02\nP_rect_00: " << c.fx << " 0 609.5593 0 0 " << c.fx
+      << " 172.854 0 0 0 1 0\nS_rect_02: 1.242000e+03 3.750000e+02\nP_rect_02:";
+  for (int r = 0; r < 3; ++r)
+    for (int col = 0; col < 4; ++col) out << ' ' << c.P_rect_02(r, col);
+  out << '\n';
+  return c;
+}
+
+}  // namespace dvso::testing

@@ -1,0 +1,107 @@
+// Velodyne depth GT (core/kitti_velodyne.h, `dvso gt-depth`): a constructed
+// scan (a wall, a nearer box in front of part of it, points behind the car)
+// projected with KITTI-like calibration; every depth is checked against the
+// projection computed by hand from P_rect_02 and the points' rectified coordinates.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+
+#include "core/disparity_io.h"
+#include "core/error.h"
+#include "core/kitti_velodyne.h"
+#include "tests/core/kitti_raw_test_util.h"
+#include "tests/dvso_cli_runner.h"
+
+namespace fs = std::filesystem;
+
+namespace dvso {
+namespace {
+
+struct TempDir {
+  fs::path path;
+  explicit TempDir(const std::string& name)
+      : path(fs::temp_directory_path() / ("dvso_velo_" + name + "_" + std::to_string(::getpid()))) {
+    fs::remove_all(path);
+    fs::create_directories(path);
+  }
+  ~TempDir() { fs::remove_all(path); }
+};
+
+TEST(KittiVelodyne, ScanProjectsToTheNearestDepthPerPixelLikeTheHandProjection) {
+  TempDir tmp("scan");
+  const testing::RawCalibration calib = testing::WriteRawCalibration(tmp.path);
+  // Points in rectified camera-00 coordinates: a wall at z = 20 m, a box face at z = 8 m in front of
+  // part of it, and points behind the car (z < 0) that must not appear.
+  std::vector<Eigen::Vector3d> rectified;
+  for (double x = -8; x <= 8; x += 0.05)
+    for (double y = -2; y <= 1.5; y += 0.1) rectified.emplace_back(x, y, 20.0);
+  for (double x = -1; x <= 1; x += 0.02)
+    for (double y = -0.5; y <= 1.0; y += 0.05) rectified.emplace_back(x, y, 8.0);
+  for (double x = -5; x <= 5; x += 0.5) rectified.emplace_back(x, 0.5, -6.0);
+  const Eigen::Isometry3d velo_from_rectified =
+      (testing::Rigid(calib.rect, Eigen::Vector3d::Zero()) * calib.cam0_from_velo).inverse();
+  std::vector<VelodynePoint> scan;
+  for (const Eigen::Vector3d& p : rectified) {
+    const Eigen::Vector3f v = (velo_from_rectified * p).cast<float>();
+    scan.emplace_back(v.x(), v.y(), v.z(), 0.5f);
+  }
+  // Expected: hand projection with P_rect_02 of the float-rounded points, nearest per pixel.
+  std::map<std::pair<long, long>, double> expected;
+  for (const VelodynePoint& v : scan) {
+    const Eigen::Vector3d r = velo_from_rectified.inverse() * v.head<3>().cast<double>();
+    const Eigen::Vector3d x = calib.P_rect_02 * r.homogeneous();
+    if (r.z() <= 0) continue;
+    const std::pair<long, long> pixel{std::lround(x.y() / x.z()), std::lround(x.x() / x.z())};
+    if (pixel.first < 0 || pixel.second < 0 || pixel.first >= 375 || pixel.second >= 1242) continue;
+    auto [it, inserted] = expected.emplace(pixel, x.z());
+    if (!inserted) it->second = std::min(it->second, x.z());
+  }
+  ASSERT_GT(expected.size(), 1000u);
+
+  const VelodyneProjection projection = ReadVelodyneProjection(tmp.path.string(), 2);
+  ASSERT_EQ(projection.width, 1242);
+  ASSERT_EQ(projection.height, 375);
+  const cv::Mat depth = ProjectVelodyneDepth(scan, projection);
+  EXPECT_EQ(cv::countNonZero(depth), static_cast<int>(expected.size()));
+  int near_pixels = 0;
+  for (const auto& [pixel, z] : expected) {
+    EXPECT_NEAR(depth.at<float>(static_cast<int>(pixel.first), static_cast<int>(pixel.second)), z, 1e-4);
+    near_pixels += z < 10;
+  }
+  EXPECT_GT(near_pixels, 100);  // the box hides the wall where both project
+
+  // Through the CLI: a raw drive folder, PNG depth (m * 256) within half a quantisation step.
+  const fs::path drive = tmp.path / "2011_09_26_drive_0002_sync";
+  fs::create_directories(drive / "velodyne_points" / "data");
+  WriteVelodyneScan((drive / "velodyne_points" / "data" / "0000000000.bin").string(), scan);
+  EXPECT_EQ(ReadVelodyneScan((drive / "velodyne_points" / "data" / "0000000000.bin").string()).size(), scan.size());
+  const testing::CliRun run =
+      testing::RunDvso("gt-depth --quiet --sequence " + drive.string() + " --out " + (tmp.path / "gt").string());
+  ASSERT_EQ(run.exit_code, 0) << run.out;
+  const cv::Mat png = ReadKittiMapPng((tmp.path / "gt" / "0000000000.png").string());
+  for (const auto& [pixel, z] : expected) {
+    EXPECT_NEAR(png.at<float>(static_cast<int>(pixel.first), static_cast<int>(pixel.second)), z, 0.5 / 256 + 1e-4);
+  }
+}
+
+TEST(KittiVelodyne, BadScanIsOneClearError) {
+  TempDir tmp("bad");
+  const std::string path = (tmp.path / "0000000000.bin").string();
+  std::ofstream(path, std::ios::binary) << "0123456789";  // 10 bytes: not whole points
+  try {
+    ReadVelodyneScan(path);
+    FAIL() << "a truncated scan must throw";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("0000000000.bin"), std::string::npos) << e.what();
+  }
+  const testing::CliRun run = testing::RunDvso("gt-depth --sequence " + tmp.path.string() + " --out " +
+                                               (tmp.path / "gt").string());
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_NE(run.out.find("velodyne_points"), std::string::npos) << run.out;
+}
+
+}  // namespace
+}  // namespace dvso
