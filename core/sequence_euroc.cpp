@@ -244,11 +244,12 @@ std::unique_ptr<SequenceReader> OpenImageFolder(const std::string& path, const s
 std::unique_ptr<SequenceReader> OpenSequence(const std::string& path, const std::string& camera_file) {
   RequireFile(fs::is_directory(path), path, "sequence directory does not exist");
   if (fs::is_regular_file(JoinPath(path, "calib.txt"))) return OpenKittiSequence(path);
+  if (IsKittiRawDrive(path)) return OpenKittiRawSequence(path);
   if (fs::is_directory(JoinPath(path, "mav0")) || fs::is_regular_file(JoinPath(path, "cam0/data.csv"))) {
     return OpenEurocSequence(path);
   }
   if (!camera_file.empty()) return OpenImageFolder(path, camera_file);
-  throw Error(path, "unknown sequence layout: expected calib.txt (KITTI), mav0/ (EuRoC), or an image folder "
+  throw Error(path, "unknown sequence layout: expected calib.txt (KITTI), image_00/data (KITTI raw), mav0/ (EuRoC), or an image folder "
                     "with --camera FILE");
 }
 
