@@ -3,12 +3,15 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 
 #include "core/error.h"
 #include "core/fs_util.h"
 #include "core/kitti_raw_calibration.h"
 
 namespace dvso {
+
+namespace fs = std::filesystem;
 
 namespace {
 // Points closer than this ahead of the Velodyne (m, along its x axis) are dropped: behind the
@@ -17,7 +20,26 @@ constexpr float kMinForward = 0.0f;
 constexpr int kFloatsPerPoint = 4;
 }  // namespace
 
+std::vector<VelodynePoint> ReadVelodyneTextScan(const std::string& path) {
+  std::ifstream in(path);
+  RequireFile(in.good(), path, "cannot open Velodyne scan");
+  std::vector<VelodynePoint> points;
+  std::string line;
+  int line_number = 0;
+  while (std::getline(in, line)) {
+    ++line_number;
+    if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
+    std::istringstream values(line);
+    VelodynePoint p;
+    RequireFile(static_cast<bool>(values >> p.x() >> p.y() >> p.z() >> p.w()), path,
+                "line " + std::to_string(line_number) + ": expected 'x y z reflectance'");
+    points.push_back(p);
+  }
+  return points;
+}
+
 std::vector<VelodynePoint> ReadVelodyneScan(const std::string& path) {
+  if (fs::path(path).extension() == ".txt") return ReadVelodyneTextScan(path);
   std::ifstream in(path, std::ios::binary | std::ios::ate);
   RequireFile(in.good(), path, "cannot open Velodyne scan");
   const std::streamsize bytes = in.tellg();

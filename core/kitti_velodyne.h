@@ -20,8 +20,9 @@ namespace dvso {
 // x y z reflectance, as stored in velodyne_points/data/NNNNNNNNNN.bin (float32).
 using VelodynePoint = Eigen::Vector4f;
 
-// Reads a .bin scan (float32 quadruples). Throws naming the file if it is missing or its size
-// is not a multiple of 16 bytes.
+// Reads a scan: .bin (float32 quadruples; the sync drives) or .txt (one "x y z reflectance" line per
+// point; the extract drives). Throws naming the file if it is missing or malformed (a .bin whose
+// size is not a multiple of 16 bytes, a text line without 4 numbers).
 std::vector<VelodynePoint> ReadVelodyneScan(const std::string& path);
 // Writes a .bin scan (for synthetic drives and tests).
 void WriteVelodyneScan(const std::string& path, const std::vector<VelodynePoint>& points);

@@ -32,10 +32,11 @@ void Run(const GtDepthArgs& args) {
               "no Velodyne folder (KITTI raw layout: DRIVE/velodyne_points/data/*.bin)");
   std::vector<fs::path> scans;
   for (const auto& entry : fs::directory_iterator(scans_dir)) {
-    if (entry.is_regular_file() && entry.path().extension() == ".bin") scans.push_back(entry.path());
+    const std::string ext = entry.path().extension().string();
+    if (entry.is_regular_file() && (ext == ".bin" || ext == ".txt")) scans.push_back(entry.path());
   }
   std::sort(scans.begin(), scans.end());
-  RequireFile(!scans.empty(), scans_dir.string(), "no .bin scans (the extract drives' text scans are not read yet)");
+  RequireFile(!scans.empty(), scans_dir.string(), "no .bin or .txt scans");
   const VelodyneProjection projection = ReadVelodyneProjection(FindRawCalibrationDir(args.drive_dir), args.camera);
   EnsureDirectory(args.out_dir);
   ProgressBar progress("gt-depth", static_cast<long>(scans.size()));
@@ -61,7 +62,7 @@ void AddGtDepthCommand(CLI::App& app) {
       "KITTI raw drive: Velodyne scans projected into a rectified camera (nearest point per pixel, points behind "
       "dropped) as KITTI depth PNGs (m * 256), the Eigen-split depth GT of monodepth's generate_depth_map "
       "(0-based pixels: monodepth's maps are shifted by one pixel left and up)");
-  cmd->add_option("--sequence", args->drive_dir, "drive folder with velodyne_points/data/*.bin")->required();
+  cmd->add_option("--sequence", args->drive_dir, "drive folder with velodyne_points/data/*.bin (sync) or *.txt (extract)")->required();
   cmd->add_option("--out", args->out_dir, "output folder (one PNG per scan, named like it)")->required();
   cmd->add_option("--camera", args->camera, "rectified camera: 2 (colour left, the network's) or 0 (grey left)")
       ->capture_default_str();

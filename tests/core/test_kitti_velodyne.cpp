@@ -78,6 +78,14 @@ TEST(KittiVelodyne, ScanProjectsToTheNearestDepthPerPixelLikeTheHandProjection) 
   fs::create_directories(drive / "velodyne_points" / "data");
   WriteVelodyneScan((drive / "velodyne_points" / "data" / "0000000000.bin").string(), scan);
   EXPECT_EQ(ReadVelodyneScan((drive / "velodyne_points" / "data" / "0000000000.bin").string()).size(), scan.size());
+  {  // The extract drives' text format gives the same points.
+    std::ofstream text(tmp.path / "scan.txt");
+    text.precision(9);
+    for (const VelodynePoint& p : scan) text << p.x() << ' ' << p.y() << ' ' << p.z() << ' ' << p.w() << '\n';
+  }
+  const std::vector<VelodynePoint> from_text = ReadVelodyneScan((tmp.path / "scan.txt").string());
+  ASSERT_EQ(from_text.size(), scan.size());
+  EXPECT_TRUE(from_text[17].isApprox(scan[17], 1e-6f));
   const testing::CliRun run =
       testing::RunDvso("gt-depth --quiet --sequence " + drive.string() + " --out " + (tmp.path / "gt").string());
   ASSERT_EQ(run.exit_code, 0) << run.out;
@@ -96,6 +104,13 @@ TEST(KittiVelodyne, BadScanIsOneClearError) {
     FAIL() << "a truncated scan must throw";
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("0000000000.bin"), std::string::npos) << e.what();
+  }
+  std::ofstream(tmp.path / "bad.txt") << "1 2 3 0.5\n4 5 six 0.5\n";
+  try {
+    ReadVelodyneScan((tmp.path / "bad.txt").string());
+    FAIL() << "a malformed text scan must throw";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("line 2"), std::string::npos) << e.what();
   }
   const testing::CliRun run = testing::RunDvso("gt-depth --sequence " + tmp.path.string() + " --out " +
                                                (tmp.path / "gt").string());
