@@ -72,19 +72,13 @@ OxtsPacket PoseToOxts(const Eigen::Isometry3d& T, double scale) {
 }
 
 Eigen::Isometry3d CameraFromImu(const std::string& calib_dir, int camera) {
-  Require(camera >= 0 && camera <= 3, "camera must be 0, 1, 2 or 3 (KITTI raw image_00..image_03)");
-  const std::string cam_to_cam = JoinPath(calib_dir, "calib_cam_to_cam.txt");
-  const KittiCalibration entries = ReadKittiCalibration(cam_to_cam);
-  Eigen::Isometry3d rectify = Eigen::Isometry3d::Identity();
-  rectify.linear() = RowMajor3x3(CalibrationEntry(entries, "R_rect_00", 9, cam_to_cam));
+  const RawCameraCalibration calibration(calib_dir);
   // Rectified camera X sits at -P(0,3)/P(0,0) along x of rectified camera 00 (P_rect_0X = K [I | t]).
-  const std::vector<double>& P = CalibrationEntry(entries, "P_rect_0" + std::to_string(camera), 12, cam_to_cam);
-  RequireFile(P[0] > 0, cam_to_cam, "P_rect_0" + std::to_string(camera) + " has no positive focal length");
+  const Eigen::Matrix<double, 3, 4> P = calibration.Projection(camera);
   Eigen::Isometry3d shift = Eigen::Isometry3d::Identity();
-  shift.translation().x() = P[3] / P[0];
+  shift.translation().x() = P(0, 3) / P(0, 0);
   const Eigen::Isometry3d velo_from_imu = ReadRigidCalibration(JoinPath(calib_dir, "calib_imu_to_velo.txt"));
-  const Eigen::Isometry3d cam0_from_velo = ReadRigidCalibration(JoinPath(calib_dir, "calib_velo_to_cam.txt"));
-  return shift * rectify * cam0_from_velo * velo_from_imu;
+  return shift * calibration.RectifiedFromVelodyne() * velo_from_imu;
 }
 
 std::vector<Eigen::Isometry3d> OxtsCameraPoses(const std::string& drive_dir, int camera) {

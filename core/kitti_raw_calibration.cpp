@@ -53,6 +53,25 @@ Eigen::Isometry3d ReadRigidCalibration(const std::string& path) {
   return T;
 }
 
+RawCameraCalibration::RawCameraCalibration(const std::string& calib_dir)
+    : dir(calib_dir), path((fs::path(calib_dir) / "calib_cam_to_cam.txt").string()), entries(ReadKittiCalibration(path)) {}
+
+Eigen::Matrix<double, 3, 4> RawCameraCalibration::Projection(int camera) const {
+  RequireFile(camera >= 0 && camera <= 3, path, "camera must be 0, 1, 2 or 3 (KITTI raw image_00..image_03)");
+  const std::string key = "P_rect_0" + std::to_string(camera);
+  const std::vector<double>& p = CalibrationEntry(entries, key, 12, path);
+  RequireFile(p[0] > 0, path, key + " has no positive focal length");
+  Eigen::Matrix<double, 3, 4> P;
+  P << p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11];
+  return P;
+}
+
+Eigen::Isometry3d RawCameraCalibration::RectifiedFromVelodyne() const {
+  Eigen::Isometry3d rectify = Eigen::Isometry3d::Identity();
+  rectify.linear() = RowMajor3x3(CalibrationEntry(entries, "R_rect_00", 9, path));
+  return rectify * ReadRigidCalibration((fs::path(dir) / "calib_velo_to_cam.txt").string());
+}
+
 std::string FindRawCalibrationDir(const std::string& drive_dir) {
   const std::string name = "calib_cam_to_cam.txt";
   for (const fs::path& dir : {fs::path(drive_dir), fs::path(drive_dir).lexically_normal().parent_path()}) {

@@ -63,23 +63,14 @@ void WriteVelodyneScan(const std::string& path, const std::vector<VelodynePoint>
 }
 
 VelodyneProjection ReadVelodyneProjection(const std::string& calib_dir, int camera) {
-  Require(camera >= 0 && camera <= 3, "camera must be 0, 1, 2 or 3 (KITTI raw image_00..image_03)");
-  const std::string cam_to_cam = JoinPath(calib_dir, "calib_cam_to_cam.txt");
-  const KittiCalibration c = ReadKittiCalibration(cam_to_cam);
-  const std::string id = "0" + std::to_string(camera);
-  Eigen::Matrix4d rectify = Eigen::Matrix4d::Identity();
-  rectify.topLeftCorner<3, 3>() = RowMajor3x3(CalibrationEntry(c, "R_rect_00", 9, cam_to_cam));
-  const std::vector<double>& p = CalibrationEntry(c, "P_rect_" + id, 12, cam_to_cam);
-  Eigen::Matrix<double, 3, 4> P;
-  P << p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11];
-  const std::vector<double>& size = CalibrationEntry(c, "S_rect_" + id, 2, cam_to_cam);
+  const RawCameraCalibration calibration(calib_dir);
   VelodyneProjection projection;
+  projection.velo_to_image = calibration.Projection(camera) * calibration.RectifiedFromVelodyne().matrix();
+  const std::string key = "S_rect_0" + std::to_string(camera);
+  const std::vector<double>& size = CalibrationEntry(calibration.entries, key, 2, calibration.path);
   projection.width = static_cast<int>(std::lround(size[0]));
   projection.height = static_cast<int>(std::lround(size[1]));
-  RequireFile(projection.width > 0 && projection.height > 0, cam_to_cam, "S_rect_" + id + " is not an image size");
-  const Eigen::Matrix4d cam0_from_velo =
-      ReadRigidCalibration(JoinPath(calib_dir, "calib_velo_to_cam.txt")).matrix();
-  projection.velo_to_image = P * rectify * cam0_from_velo;
+  RequireFile(projection.width > 0 && projection.height > 0, calibration.path, key + " is not an image size");
   return projection;
 }
 

@@ -6,8 +6,9 @@
 //    optional), calib.txt (P0..P3), times.txt; frame i = %06d.png. Our
 //    simulator writes this layout too (plus poses.txt, depth_0/, disp_0/, disp_1/).
 //  - EuRoC/ASL: mav0/cam{0,1}/data.csv + sensor.yaml; rectified on read.
-//  - KITTI raw, rectified drives (_sync): image_00..03/data/, timestamps.txt,
-//    calibration files of the date folder (sequence_kitti_raw.cpp).
+//  - KITTI raw drives: image_00..03/data/, timestamps.txt, calibration files of
+//    the date folder; _sync drives as they are, _extract drives rectified on read
+//    (sequence_kitti_raw.cpp).
 //  - Monocular folder: images (sorted by name) + a DSO-style camera file.
 #pragma once
 
@@ -62,7 +63,7 @@ std::unique_ptr<SequenceReader> OpenSequence(const std::string& path,
                                              const std::string& camera_file = "");
 
 std::unique_ptr<SequenceReader> OpenKittiSequence(const std::string& path);
-// KITTI raw rectified drive (DRIVE/image_0X/data/, calibration in DRIVE or its parent).
+// KITTI raw drive, _sync or _extract (DRIVE/image_0X/data/, calibration in DRIVE or its parent).
 std::unique_ptr<SequenceReader> OpenKittiRawSequence(const std::string& path);
 bool IsKittiRawDrive(const std::string& path);
 // "2011-09-26 13:02:25.964389445" (KITTI raw timestamps.txt) -> seconds since the epoch, UTC.

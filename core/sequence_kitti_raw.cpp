@@ -95,18 +95,17 @@ class KittiRawSequence : public SequenceReader {
     extract_ = fs::path(root).lexically_normal().filename().string().find("_extract") != std::string::npos;
     const bool grey = fs::is_directory(Camera(0));
     const int left_id = grey ? 0 : 2, right_id = left_id + 1;
-    left_dir_ = Camera(left_id);
-    const std::string right_dir = Camera(right_id);
-    const std::vector<std::string> left_files = internal::ListImages(left_dir_);
-    RequireFile(!left_files.empty(), left_dir_, "no images found");
-    const std::string calib_dir = FindRawCalibrationDir(root);
-    const std::string cam_to_cam = JoinPath(calib_dir, "calib_cam_to_cam.txt");
-    const KittiCalibration c = ReadKittiCalibration(cam_to_cam);
-    const std::vector<double>& p_left = CalibrationEntry(c, "P_rect_0" + std::to_string(left_id), 12, cam_to_cam);
-    camera_.left.fx = p_left[0];
-    camera_.left.fy = p_left[5];
-    camera_.left.cx = p_left[2];
-    camera_.left.cy = p_left[6];
+    const std::string left_dir = Camera(left_id), right_dir = Camera(right_id);
+    const std::vector<std::string> left_files = internal::ListImages(left_dir);
+    RequireFile(!left_files.empty(), left_dir, "no images found");
+    const RawCameraCalibration calibration(FindRawCalibrationDir(root));
+    const KittiCalibration& c = calibration.entries;
+    const std::string& cam_to_cam = calibration.path;
+    const Eigen::Matrix<double, 3, 4> p_left = calibration.Projection(left_id);
+    camera_.left.fx = p_left(0, 0);
+    camera_.left.fy = p_left(1, 1);
+    camera_.left.cx = p_left(0, 2);
+    camera_.left.cy = p_left(1, 2);
     if (extract_) {
       const std::vector<double>& size = CalibrationEntry(c, "S_rect_0" + std::to_string(left_id), 2, cam_to_cam);
       camera_.left.width = static_cast<int>(std::lround(size[0]));
@@ -124,15 +123,15 @@ class KittiRawSequence : public SequenceReader {
     }
     stereo_ = fs::is_directory(right_dir);
     if (stereo_) {
-      const std::vector<double>& p_right = CalibrationEntry(c, "P_rect_0" + std::to_string(right_id), 12, cam_to_cam);
+      const Eigen::Matrix<double, 3, 4> p_right = calibration.Projection(right_id);
       // P_rect_0X = K [I | t_X] in rectified camera 00: baseline = (t_left - t_right).x.
-      camera_.baseline = (p_left[3] - p_right[3]) / p_left[0];
+      camera_.baseline = (p_left(0, 3) - p_right(0, 3)) / p_left(0, 0);
       RequireFile(camera_.baseline > 0, cam_to_cam, "P_rect gives a non-positive stereo baseline");
       if (extract_) right_rectifier_ = MakeRectifier(c, right_id, cam_to_cam);
     }
     // Colour beside the grey pair: sync drives only (extract drives would need their own pairing).
     color_ = !extract_ && grey && fs::is_directory(Camera(2));
-    const std::vector<double> times = ReadCameraTimestamps(left_dir_, left_files.size());
+    const std::vector<double> times = ReadCameraTimestamps(left_dir, left_files.size());
     std::vector<std::string> right_files;
     std::vector<double> right_times;
     if (stereo_ && extract_) {
@@ -210,7 +209,7 @@ class KittiRawSequence : public SequenceReader {
     return times;
   }
 
-  std::string root_, left_dir_;
+  std::string root_;
   std::vector<std::string> files_, right_files_;
   std::vector<double> timestamps_;
   StereoCamera camera_;
