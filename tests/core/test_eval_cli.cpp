@@ -9,6 +9,7 @@
 
 #include "core/trajectory.h"
 #include "tests/dvso_cli_runner.h"
+#include "tests/temp_dir.h"
 
 namespace fs = std::filesystem;
 
@@ -18,21 +19,12 @@ namespace {
 using testing::CliRun;
 using testing::RunDvso;
 
-struct TempDir {
-  fs::path path;
-  explicit TempDir(const std::string& name)
-      : path(fs::temp_directory_path() / ("dvso_eval_cli_" + name + "_" + std::to_string(::getpid()))) {
-    fs::remove_all(path);
-    fs::create_directories(path);
-  }
-  ~TempDir() { fs::remove_all(path); }
-  std::string operator/(const std::string& name) const { return (path / name).string(); }
-};
+using testing::TempDir;
 
 const std::string kGt = std::string(DVSO_TEST_DATA_DIR) + "/kitti_poses/04.txt";
 
 TEST(EvalCli, OdometryJsonSim3OnScaledEstimate) {
-  TempDir dir("odo");
+  TempDir dir("eval_cli_odo");
   Trajectory est = ReadTrajectory(kGt);
   for (StampedPose& p : est.poses) p.T_world_camera.translation() *= 0.5;
   WriteKittiTrajectory(dir / "est.txt", est);
@@ -51,7 +43,7 @@ TEST(EvalCli, OdometryJsonSim3OnScaledEstimate) {
 }
 
 TEST(EvalCli, OdometryTumFilesReportMissingFrames) {
-  TempDir dir("tum");
+  TempDir dir("eval_cli_tum");
   Trajectory gt = ReadTrajectory(kGt);
   for (StampedPose& p : gt.poses) p.timestamp = 1.5e9 + 0.1 * p.timestamp;
   Trajectory est;
@@ -67,7 +59,7 @@ TEST(EvalCli, OdometryTumFilesReportMissingFrames) {
 }
 
 TEST(EvalCli, OdometryBadInputIsOneClearError) {
-  TempDir dir("bad");
+  TempDir dir("eval_cli_bad");
   std::ofstream(dir / "broken.txt") << "1 2 3 4 5\n";
   CliRun r = RunDvso("eval-odometry --gt " + kGt + " --est " + dir / "broken.txt", true);
   EXPECT_EQ(r.exit_code, 1);
@@ -79,7 +71,7 @@ TEST(EvalCli, OdometryBadInputIsOneClearError) {
 }
 
 TEST(EvalCli, DepthJsonAndNameMismatch) {
-  TempDir dir("depth");
+  TempDir dir("eval_cli_depth");
   fs::create_directories(dir / "gt");
   fs::create_directories(dir / "pred");
   cv::Mat gt(10, 20, CV_16U, cv::Scalar(20 * 256));  // disparity 20 px

@@ -13,21 +13,14 @@
 #include "core/trajectory.h"
 #include "tests/core/kitti_raw_test_util.h"
 #include "tests/dvso_cli_runner.h"
+#include "tests/temp_dir.h"
 
 namespace fs = std::filesystem;
 
 namespace dvso {
 namespace {
 
-struct TempDir {
-  fs::path path;
-  explicit TempDir(const std::string& name)
-      : path(fs::temp_directory_path() / ("dvso_oxts_" + name + "_" + std::to_string(::getpid()))) {
-    fs::remove_all(path);
-    fs::create_directories(path);
-  }
-  ~TempDir() { fs::remove_all(path); }
-};
+using testing::TempDir;
 
 TEST(KittiOxts, MercatorFormulasByHand) {
   EXPECT_DOUBLE_EQ(MercatorScale(0.0), 1.0);
@@ -71,7 +64,7 @@ Eigen::Isometry3d CameraTwoFromImu(const testing::RawCalibration& c) {
 }
 
 TEST(KittiOxts, SyntheticDriveRoundTripsThroughCalibrationAndCli) {
-  TempDir tmp("drive");
+  TempDir tmp("oxts_drive");
   const fs::path drive = tmp.path / "2011_09_26_drive_0001_sync";
   fs::create_directories(drive / "oxts" / "data");
   const Eigen::Isometry3d camera_from_imu = CameraTwoFromImu(testing::WriteRawCalibration(tmp.path));
@@ -123,7 +116,7 @@ TEST(KittiOxts, SyntheticDriveRoundTripsThroughCalibrationAndCli) {
 }
 
 TEST(KittiOxts, BadInputIsOneClearError) {
-  TempDir tmp("bad");
+  TempDir tmp("oxts_bad");
   const fs::path drive = tmp.path / "drive_sync";
   fs::create_directories(drive / "oxts" / "data");
   std::ofstream(drive / "oxts" / "data" / "0000000000.txt") << "49.0 8.4 115\n";  // 3 numbers only

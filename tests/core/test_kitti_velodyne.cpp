@@ -14,24 +14,17 @@
 #include "core/kitti_velodyne.h"
 #include "tests/core/kitti_raw_test_util.h"
 #include "tests/dvso_cli_runner.h"
+#include "tests/temp_dir.h"
 
 namespace fs = std::filesystem;
 
 namespace dvso {
 namespace {
 
-struct TempDir {
-  fs::path path;
-  explicit TempDir(const std::string& name)
-      : path(fs::temp_directory_path() / ("dvso_velo_" + name + "_" + std::to_string(::getpid()))) {
-    fs::remove_all(path);
-    fs::create_directories(path);
-  }
-  ~TempDir() { fs::remove_all(path); }
-};
+using testing::TempDir;
 
 TEST(KittiVelodyne, ScanProjectsToTheNearestDepthPerPixelLikeTheHandProjection) {
-  TempDir tmp("scan");
+  TempDir tmp("velo_scan");
   const testing::RawCalibration calib = testing::WriteRawCalibration(tmp.path);
   // Points in rectified camera-00 coordinates: a wall at z = 20 m, a box face at z = 8 m in front of
   // part of it, and points behind the car (z < 0) that must not appear.
@@ -96,7 +89,7 @@ TEST(KittiVelodyne, ScanProjectsToTheNearestDepthPerPixelLikeTheHandProjection) 
 }
 
 TEST(KittiVelodyne, BadScanIsOneClearError) {
-  TempDir tmp("bad");
+  TempDir tmp("velo_bad");
   const std::string path = (tmp.path / "0000000000.bin").string();
   std::ofstream(path, std::ios::binary) << "0123456789";  // 10 bytes: not whole points
   try {
