@@ -4,17 +4,21 @@
 #include <cctype>
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <iomanip>
 #include <limits>
 #include <opencv2/imgproc.hpp>
 #include <set>
 #include <sstream>
 
+#include "core/depth_split.h"
 #include "core/disparity_io.h"
 #include "core/error.h"
 #include "core/fs_util.h"
 
 namespace dvso {
+
+namespace fs = std::filesystem;
 
 namespace {
 
@@ -213,7 +217,6 @@ DepthMetrics AverageDepthMetrics(const std::vector<DepthMetrics>& per_image) {
 namespace {
 
 std::vector<std::string> ListPngNames(const std::string& dir) {
-  namespace fs = std::filesystem;
   RequireFile(fs::is_directory(dir), dir, "not a directory");
   std::vector<std::string> names;
   for (const auto& entry : fs::directory_iterator(dir)) {
@@ -235,6 +238,53 @@ std::string JoinFirst(const std::vector<std::string>& names, size_t max_count) {
 
 }  // namespace
 
+namespace {
+
+// Evaluates GT maps gt_dir/names[i] against prediction(i, gt_map) (CV_32F at the GT size, in the
+// unit of options.pred_kind); `label(i)` names the prediction in errors.
+DepthEvalResult EvaluateNamedMaps(const std::vector<std::string>& names, const std::string& gt_dir,
+                                  const std::function<cv::Mat(size_t, const cv::Mat&)>& prediction,
+                                  const std::function<std::string(size_t)>& label, const DepthEvalOptions& options) {
+  DepthEvalResult result;
+  for (size_t i = 0; i < names.size(); ++i) {
+    const std::string& name = names[i];
+    const std::string gt_path = JoinPath(gt_dir, name);
+    const cv::Mat gt_map = ReadKittiMapPng(gt_path);
+    double fxb = options.fxb;
+    if (options.kitti_focal_by_width) {
+      try {
+        fxb = KittiFocalLengthForWidth(gt_map.cols) * kKittiStereoBaseline;
+      } catch (const Error& e) {
+        throw Error(gt_path, e.what());
+      }
+    }
+    const cv::Mat pred_map = prediction(i, gt_map);
+    const cv::Mat gt_depth =
+        options.gt_kind == MapKind::kDisparity ? DisparityToDepth(gt_map, fxb, 0.0f) : gt_map;
+    const cv::Mat pred_depth = options.pred_kind == MapKind::kDisparity
+                                   ? DisparityToDepth(pred_map, fxb, std::numeric_limits<float>::infinity())
+                                   : pred_map;
+    DepthMetrics metrics;
+    try {
+      metrics = ComputeDepthMetrics(pred_depth, gt_depth, options);
+    } catch (const Error& e) {
+      throw Error(label(i), e.what());
+    }
+    if (metrics.valid_pixels == 0) {
+      result.skipped.push_back(name);
+      continue;
+    }
+    result.names.push_back(name);
+    result.per_image.push_back(metrics);
+  }
+  RequireFile(!result.per_image.empty(), gt_dir,
+              "no ground-truth map has a valid pixel inside the crop and (min_depth, max_depth)");
+  result.mean = AverageDepthMetrics(result.per_image);
+  return result;
+}
+
+}  // namespace
+
 DepthEvalResult EvaluateDepthFolders(const std::string& pred_dir, const std::string& gt_dir,
                                      const DepthEvalOptions& options) {
   options.Check();
@@ -251,43 +301,42 @@ DepthEvalResult EvaluateDepthFolders(const std::string& pred_dir, const std::str
     if (!only_pred.empty()) message += " missing in " + gt_dir + ": " + JoinFirst(only_pred, 8) + ";";
     throw Error(message);
   }
+  return EvaluateNamedMaps(
+      gt_names, gt_dir,
+      [&](size_t i, const cv::Mat& gt) {
+        return ResizePrediction(ReadKittiMapPng(JoinPath(pred_dir, gt_names[i])), options.pred_kind, gt.size());
+      },
+      [&](size_t i) { return JoinPath(pred_dir, gt_names[i]); }, options);
+}
 
-  DepthEvalResult result;
-  for (const std::string& name : gt_names) {
-    const std::string gt_path = JoinPath(gt_dir, name);
-    const std::string pred_path = JoinPath(pred_dir, name);
-    const cv::Mat gt_map = ReadKittiMapPng(gt_path);
-    double fxb = options.fxb;
-    if (options.kitti_focal_by_width) {
-      try {
-        fxb = KittiFocalLengthForWidth(gt_map.cols) * kKittiStereoBaseline;
-      } catch (const Error& e) {
-        throw Error(gt_path, e.what());
-      }
-    }
-    const cv::Mat pred_map = ResizePrediction(ReadKittiMapPng(pred_path), options.pred_kind, gt_map.size());
-    const cv::Mat gt_depth =
-        options.gt_kind == MapKind::kDisparity ? DisparityToDepth(gt_map, fxb, 0.0f) : gt_map;
-    const cv::Mat pred_depth = options.pred_kind == MapKind::kDisparity
-                                   ? DisparityToDepth(pred_map, fxb, std::numeric_limits<float>::infinity())
-                                   : pred_map;
-    DepthMetrics metrics;
-    try {
-      metrics = ComputeDepthMetrics(pred_depth, gt_depth, options);
-    } catch (const Error& e) {
-      throw Error(pred_path, e.what());
-    }
-    if (metrics.valid_pixels == 0) {
-      result.skipped.push_back(name);
-      continue;
-    }
-    result.names.push_back(name);
-    result.per_image.push_back(metrics);
+DepthEvalResult EvaluateDepthSplit(const std::string& split_path, const std::string& pred,
+                                   const std::string& gt_dir, const DepthEvalOptions& options) {
+  options.Check();
+  const std::vector<SplitEntry> entries = ReadSplitFile(split_path);
+  std::vector<std::string> names;
+  for (size_t i = 0; i < entries.size(); ++i) {
+    names.push_back(SplitMapName(static_cast<int>(i)));
+    RequireFile(fs::exists(JoinPath(gt_dir, names.back())), JoinPath(gt_dir, names.back()),
+                "no GT map for split line " + std::to_string(i + 1) + " (write them with `dvso gt-depth --split`)");
   }
-  RequireFile(!result.per_image.empty(), gt_dir,
-              "no ground-truth map has a valid pixel inside the crop and (min_depth, max_depth)");
-  result.mean = AverageDepthMetrics(result.per_image);
-  return result;
+  if (fs::path(pred).extension() == ".npy") {
+    RequireFile(options.pred_kind == MapKind::kDisparity, pred, "an .npy stack holds disparities / width");
+    const NpyDisparityStack stack(pred);
+    RequireFile(stack.size() == static_cast<int>(entries.size()), pred,
+                std::to_string(stack.size()) + " maps for " + std::to_string(entries.size()) + " split entries");
+    return EvaluateNamedMaps(
+        names, gt_dir, [&](size_t i, const cv::Mat& gt) { return stack.Frame(static_cast<int>(i), gt.cols, gt.rows); },
+        [&](size_t i) { return pred + " [" + std::to_string(i) + "]"; }, options);
+  }
+  for (const std::string& name : names) {
+    RequireFile(fs::exists(JoinPath(pred, name)), JoinPath(pred, name), "no prediction for this split entry");
+  }
+  return EvaluateNamedMaps(
+      names, gt_dir,
+      [&](size_t i, const cv::Mat& gt) {
+        return ResizePrediction(ReadKittiMapPng(JoinPath(pred, names[i])), options.pred_kind, gt.size());
+      },
+      [&](size_t i) { return JoinPath(pred, names[i]); }, options);
 }
 
 namespace {

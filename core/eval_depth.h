@@ -84,6 +84,13 @@ struct DepthEvalResult {
 DepthEvalResult EvaluateDepthFolders(const std::string& pred_dir, const std::string& gt_dir,
                                      const DepthEvalOptions& options);
 
+// The paper's Eigen-split protocol on a split file (core/depth_split.h): GT maps gt_dir/%06d.png in
+// split order (`dvso gt-depth --split`), predictions `pred` either a folder of %06d.png maps or an
+// .npy stack (N, H, W) of disparities / width with one row per split line. Throws naming the split
+// line or file for a missing map or a stack of another length.
+DepthEvalResult EvaluateDepthSplit(const std::string& split_path, const std::string& pred, const std::string& gt_dir,
+                                   const DepthEvalOptions& options);
+
 // Mean over the given per-image metrics (images with valid_pixels == 0 are ignored).
 DepthMetrics AverageDepthMetrics(const std::vector<DepthMetrics>& per_image);
 

@@ -57,17 +57,27 @@ class SequenceReader {
   virtual std::string FrameName(int index) const = 0;
 };
 
+// Which stereo pair of a KITTI raw drive is the sequence's left/right pair: the grey cameras
+// 00/01 (odometry and labels; the colour pair is still loaded beside them for the network) or
+// the colour cameras 02/03 (read as grey for the odometry, as colour for the network).
+enum class CameraPair { kGrey, kColour };
+// "grey" | "colour" (also "gray", "color"); throws dvso::Error otherwise.
+CameraPair ParseCameraPair(const std::string& name);
+
 // Opens a sequence, detecting the layout: KITTI (calib.txt), EuRoC (mav0/ or
-// cam0/data.csv), or a monocular folder (needs camera_file). Throws dvso::Error.
-std::unique_ptr<SequenceReader> OpenSequence(const std::string& path,
-                                             const std::string& camera_file = "");
+// cam0/data.csv), or a monocular folder (needs camera_file). `pair` chooses the
+// cameras of a KITTI raw drive; kColour on any other layout is an error. Throws dvso::Error.
+std::unique_ptr<SequenceReader> OpenSequence(const std::string& path, const std::string& camera_file = "",
+                                             CameraPair pair = CameraPair::kGrey);
 
 std::unique_ptr<SequenceReader> OpenKittiSequence(const std::string& path);
 // KITTI raw drive, _sync or _extract (DRIVE/image_0X/data/, calibration in DRIVE or its parent).
-std::unique_ptr<SequenceReader> OpenKittiRawSequence(const std::string& path);
+std::unique_ptr<SequenceReader> OpenKittiRawSequence(const std::string& path, CameraPair pair = CameraPair::kGrey);
 bool IsKittiRawDrive(const std::string& path);
 // "2011-09-26 13:02:25.964389445" (KITTI raw timestamps.txt) -> seconds since the epoch, UTC.
 double ParseKittiRawTimestamp(const std::string& text, const std::string& path);
+// Seconds since the epoch (UTC) -> "2011-09-26 13:02:25.964389445", the inverse of the above.
+std::string FormatKittiRawTimestamp(double epoch_seconds);
 std::unique_ptr<SequenceReader> OpenEurocSequence(const std::string& path);
 std::unique_ptr<SequenceReader> OpenImageFolder(const std::string& path, const std::string& camera_file);
 

@@ -241,10 +241,12 @@ std::unique_ptr<SequenceReader> OpenImageFolder(const std::string& path, const s
   return std::make_unique<ImageFolderSequence>(path, camera_file);
 }
 
-std::unique_ptr<SequenceReader> OpenSequence(const std::string& path, const std::string& camera_file) {
+std::unique_ptr<SequenceReader> OpenSequence(const std::string& path, const std::string& camera_file,
+                                             CameraPair pair) {
   RequireFile(fs::is_directory(path), path, "sequence directory does not exist");
+  if (IsKittiRawDrive(path)) return OpenKittiRawSequence(path, pair);
+  RequireFile(pair == CameraPair::kGrey, path, "--cameras colour needs a KITTI raw drive (image_02/ image_03/)");
   if (fs::is_regular_file(JoinPath(path, "calib.txt"))) return OpenKittiSequence(path);
-  if (IsKittiRawDrive(path)) return OpenKittiRawSequence(path);
   if (fs::is_directory(JoinPath(path, "mav0")) || fs::is_regular_file(JoinPath(path, "cam0/data.csv"))) {
     return OpenEurocSequence(path);
   }

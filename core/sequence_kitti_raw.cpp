@@ -1,8 +1,9 @@
 // KITTI raw drive reader: DRIVE/image_0X/data/*.png, image_0X/timestamps.txt,
 // calibration in the drive or its date folder (calib_cam_to_cam.txt; see
-// core/kitti_raw_calibration.h). The grey pair 00/01 is used when present, else
-// the colour pair 02/03; colour images (image_02/03) are loaded on request as in
-// the KITTI odometry layout.
+// core/kitti_raw_calibration.h). The grey pair 00/01 is used when present (or
+// asked for), else the colour pair 02/03 (read as grey for the odometry); beside
+// the grey pair the colour images (image_02/03) are loaded on request as in the
+// KITTI odometry layout.
 //  - rectified ("_sync") drives: left and right images are paired by file name;
 //  - unrectified ("_extract") drives: every camera is rectified on read with
 //    K_0X, D_0X, R_rect_0X, P_rect_0X into S_rect_0X, and the cameras, which drop
@@ -10,7 +11,10 @@
 //    kMaxPairingGap).
 // A left frame without a partner is skipped and counted (one warning), never
 // paired with a neighbour.
+#include <cmath>
+#include <cstdio>
 #include <ctime>
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
@@ -39,6 +43,18 @@ double ParseKittiRawTimestamp(const std::string& text, const std::string& path) 
   double fraction = 0.0;
   if (in.peek() == '.') in >> fraction;
   return static_cast<double>(timegm(&tm)) + fraction;
+}
+
+std::string FormatKittiRawTimestamp(double epoch_seconds) {
+  std::time_t whole = static_cast<std::time_t>(std::floor(epoch_seconds));
+  long nanoseconds = std::lround((epoch_seconds - static_cast<double>(whole)) * 1e9);
+  if (nanoseconds >= 1000000000L) ++whole, nanoseconds -= 1000000000L;
+  std::tm tm{};
+  gmtime_r(&whole, &tm);
+  char text[64];
+  std::snprintf(text, sizeof(text), "%04d-%02d-%02d %02d:%02d:%02d.%09ld", tm.tm_year + 1900, tm.tm_mon + 1, tm.tm_mday,
+                tm.tm_hour, tm.tm_min, tm.tm_sec, nanoseconds);
+  return text;
 }
 
 namespace {
@@ -89,30 +105,38 @@ std::vector<double> ReadRawTimestamps(const std::string& path) {
   return times;
 }
 
+// One camera of a drive: its image files, their timestamps and (extract drives) its rectifier.
+struct RawCameraFiles {
+  std::string dir;                  // DRIVE/image_0X/data
+  std::vector<std::string> files;   // sorted
+  std::vector<double> times;        // epoch seconds, one per file
+  RawRectifier rectifier;           // extract drives only
+};
+
 class KittiRawSequence : public SequenceReader {
  public:
-  explicit KittiRawSequence(const std::string& root) : root_(root) {
+  KittiRawSequence(const std::string& root, CameraPair pair) : root_(root) {
     extract_ = fs::path(root).lexically_normal().filename().string().find("_extract") != std::string::npos;
     const bool grey = fs::is_directory(Camera(0));
-    const int left_id = grey ? 0 : 2, right_id = left_id + 1;
-    const std::string left_dir = Camera(left_id), right_dir = Camera(right_id);
-    const std::vector<std::string> left_files = internal::ListImages(left_dir);
-    RequireFile(!left_files.empty(), left_dir, "no images found");
+    const int left_id = pair == CameraPair::kColour || !grey ? 2 : 0, right_id = left_id + 1;
+    RequireFile(fs::is_directory(Camera(left_id)), Camera(left_id),
+                pair == CameraPair::kColour ? "no colour camera (--cameras colour needs image_02/)" : "no images");
+    colour_is_left_ = left_id == 2;
     const RawCameraCalibration calibration(FindRawCalibrationDir(root));
-    const KittiCalibration& c = calibration.entries;
     const std::string& cam_to_cam = calibration.path;
+    const RawCameraFiles left = LoadCamera(left_id, calibration);
     const Eigen::Matrix<double, 3, 4> p_left = calibration.Projection(left_id);
     camera_.left.fx = p_left(0, 0);
     camera_.left.fy = p_left(1, 1);
     camera_.left.cx = p_left(0, 2);
     camera_.left.cy = p_left(1, 2);
     if (extract_) {
-      const std::vector<double>& size = CalibrationEntry(c, "S_rect_0" + std::to_string(left_id), 2, cam_to_cam);
+      const std::vector<double>& size =
+          CalibrationEntry(calibration.entries, "S_rect_0" + std::to_string(left_id), 2, cam_to_cam);
       camera_.left.width = static_cast<int>(std::lround(size[0]));
       camera_.left.height = static_cast<int>(std::lround(size[1]));
-      left_rectifier_ = MakeRectifier(c, left_id, cam_to_cam);
     } else {
-      const cv::Mat first = internal::LoadGreyImage(left_files[0]);
+      const cv::Mat first = internal::LoadGreyImage(left.files[0]);
       camera_.left.width = first.cols;
       camera_.left.height = first.rows;
     }
@@ -121,100 +145,164 @@ class KittiRawSequence : public SequenceReader {
     } catch (const Error& e) {
       throw Error(cam_to_cam, e.what());
     }
-    stereo_ = fs::is_directory(right_dir);
+    stereo_ = fs::is_directory(Camera(right_id));
+    RawCameraFiles right;
     if (stereo_) {
       const Eigen::Matrix<double, 3, 4> p_right = calibration.Projection(right_id);
       // P_rect_0X = K [I | t_X] in rectified camera 00: baseline = (t_left - t_right).x.
       camera_.baseline = (p_left(0, 3) - p_right(0, 3)) / p_left(0, 0);
       RequireFile(camera_.baseline > 0, cam_to_cam, "P_rect gives a non-positive stereo baseline");
-      if (extract_) right_rectifier_ = MakeRectifier(c, right_id, cam_to_cam);
+      right = LoadCamera(right_id, calibration);
     }
-    // Colour beside the grey pair: sync drives only (extract drives would need their own pairing).
-    color_ = !extract_ && grey && fs::is_directory(Camera(2));
-    const std::vector<double> times = ReadCameraTimestamps(left_dir, left_files.size());
-    std::vector<std::string> right_files;
-    std::vector<double> right_times;
-    if (stereo_ && extract_) {
-      right_files = internal::ListImages(right_dir);
-      right_times = ReadCameraTimestamps(right_dir, right_files.size());
+    // The colour pair beside the grey one (for the network), paired with the grey frames like the right camera.
+    RawCameraFiles colour_left, colour_right;
+    color_ = colour_is_left_ || fs::is_directory(Camera(2));
+    if (color_ && !colour_is_left_) {
+      colour_left = LoadCamera(2, calibration);
+      if (fs::is_directory(Camera(3))) colour_right = LoadCamera(3, calibration);
     }
     int unpaired = 0;
-    size_t j = 0;
-    for (size_t i = 0; i < left_files.size(); ++i) {
-      std::string right;
-      if (stereo_ && extract_) {
-        // Nearest right timestamp (both lists are in time order).
-        while (j + 1 < right_times.size() && std::abs(right_times[j + 1] - times[i]) <= std::abs(right_times[j] - times[i])) {
-          ++j;
+    for (size_t i = 0; i < left.files.size(); ++i) {
+      Frame frame;
+      frame.left = left.files[i];
+      if (stereo_) {
+        frame.right = Partner(left, i, right);
+        if (frame.right.empty()) {
+          ++unpaired;
+          continue;
         }
-        if (!right_times.empty() && std::abs(right_times[j] - times[i]) < kMaxPairingGap) right = right_files[j];
-      } else if (stereo_) {
-        const std::string same_name = JoinPath(right_dir, fs::path(left_files[i]).filename().string());
-        if (fs::exists(same_name)) right = same_name;
       }
-      if (stereo_ && right.empty()) {
-        ++unpaired;
-        continue;
+      if (color_ && !colour_is_left_) {
+        frame.left_colour = Partner(left, i, colour_left);
+        if (!colour_right.files.empty()) frame.right_colour = Partner(left, i, colour_right);
+        // Colour is optional per frame: a frame whose colour image was dropped keeps its grey pair.
+        if (frame.left_colour.empty()) ++colour_missing_;
       }
-      files_.push_back(left_files[i]);
-      right_files_.push_back(right);
-      timestamps_.push_back(times[i] - times[0]);
+      frames_.push_back(frame);
+      timestamps_.push_back(left.times[i] - left.times[0]);
     }
-    RequireFile(!files_.empty(), right_dir, "no left image has a right partner");
+    RequireFile(!frames_.empty(), Camera(right_id), "no left image has a right partner");
     if (unpaired > 0) {
       std::cerr << "dvso: warning: " << root << ": " << unpaired << " frame(s) without a right image skipped\n";
     }
+    if (colour_missing_ > 0) {
+      std::cerr << "dvso: warning: " << root << ": " << colour_missing_ << " frame(s) without a colour image\n";
+    }
+    left_rectifier_ = left.rectifier;
+    right_rectifier_ = right.rectifier;
+    colour_left_rectifier_ = colour_left.rectifier;
+    colour_right_rectifier_ = colour_right.rectifier;
   }
 
-  int size() const override { return static_cast<int>(files_.size()); }
+  int size() const override { return static_cast<int>(frames_.size()); }
   bool is_stereo() const override { return stereo_; }
   bool has_color() const override { return color_; }
   const StereoCamera& camera() const override { return camera_; }
   const std::vector<double>& timestamps() const override { return timestamps_; }
   const std::string& root() const override { return root_; }
-  std::string FrameName(int index) const override { return fs::path(files_.at(index)).stem().string(); }
+  std::string FrameName(int index) const override { return fs::path(frames_.at(index).left).stem().string(); }
 
   StereoFrame Read(int index, const SequenceReadOptions& options) const override {
     Require(index >= 0 && index < size(), root_ + ": frame " + std::to_string(index) + " out of range");
-    const cv::Size size(camera_.left.width, camera_.left.height);
+    const Frame& files = frames_[static_cast<size_t>(index)];
     StereoFrame frame;
     frame.index = index;
-    frame.timestamp = timestamps_[index];
-    if (extract_) {
-      frame.left = left_rectifier_.Apply(internal::LoadGreyImage(files_[index], left_rectifier_.raw_size));
-      if (options.load_right && stereo_) {
-        frame.right = right_rectifier_.Apply(internal::LoadGreyImage(right_files_[index], right_rectifier_.raw_size));
+    frame.timestamp = timestamps_[static_cast<size_t>(index)];
+    const bool right = options.load_right && stereo_;
+    if (colour_is_left_) {
+      // The colour pair is the sequence: grey = its luminance, colour on request.
+      const cv::Mat left_colour = LoadColour(files.left, left_rectifier_);
+      cv::cvtColor(left_colour, frame.left, cv::COLOR_BGR2GRAY);
+      if (options.load_color) frame.left_color = left_colour;
+      if (right) {
+        const cv::Mat right_colour = LoadColour(files.right, right_rectifier_);
+        cv::cvtColor(right_colour, frame.right, cv::COLOR_BGR2GRAY);
+        if (options.load_color) frame.right_color = right_colour;
       }
       return frame;
     }
-    const std::string name = fs::path(files_[index]).filename().string();
-    frame.left = internal::LoadGreyImage(files_[index], size);
-    if (options.load_right && stereo_) frame.right = internal::LoadGreyImage(right_files_[index], size);
-    if (options.load_color && color_) {
-      frame.left_color = internal::LoadColorImage(JoinPath(Camera(2), name), size);
-      if (options.load_right && fs::exists(JoinPath(Camera(3), name))) {
-        frame.right_color = internal::LoadColorImage(JoinPath(Camera(3), name), size);
+    frame.left = LoadGrey(files.left, left_rectifier_);
+    if (right) frame.right = LoadGrey(files.right, right_rectifier_);
+    if (options.load_color && !files.left_colour.empty()) {
+      frame.left_color = LoadColour(files.left_colour, colour_left_rectifier_);
+      if (options.load_right && !files.right_colour.empty()) {
+        frame.right_color = LoadColour(files.right_colour, colour_right_rectifier_);
       }
     }
     return frame;
   }
 
  private:
+  struct Frame {
+    std::string left, right, left_colour, right_colour;  // image files; "" = none
+  };
+
   std::string Camera(int id) const { return JoinPath(JoinPath(root_, "image_0" + std::to_string(id)), "data"); }
-  static std::vector<double> ReadCameraTimestamps(const std::string& data_dir, size_t images) {
-    const std::string path = JoinPath(fs::path(data_dir).parent_path().string(), "timestamps.txt");
-    std::vector<double> times = ReadRawTimestamps(path);
-    RequireFile(times.size() == images, path,
-                std::to_string(times.size()) + " timestamps for " + std::to_string(images) + " images");
-    return times;
+
+  RawCameraFiles LoadCamera(int id, const RawCameraCalibration& calibration) const {
+    RawCameraFiles camera;
+    camera.dir = Camera(id);
+    camera.files = internal::ListImages(camera.dir);
+    RequireFile(!camera.files.empty(), camera.dir, "no images found");
+    const std::string path = JoinPath(fs::path(camera.dir).parent_path().string(), "timestamps.txt");
+    const std::vector<double> times = ReadRawTimestamps(path);
+    if (times.size() == camera.files.size()) {
+      camera.times = times;
+    } else {
+      // Line k of timestamps.txt belongs to file k (%010d): with files missing (a damaged or partial
+      // download) the remaining ones keep their own times.
+      for (const std::string& file : camera.files) {
+        const std::string stem = fs::path(file).stem().string();
+        const bool numbered = !stem.empty() && stem.size() <= 10 && stem.find_first_not_of("0123456789") == std::string::npos;
+        const size_t number = numbered ? std::stoul(stem) : times.size();
+        RequireFile(number < times.size(), path,
+                    std::to_string(times.size()) + " timestamps for " + std::to_string(camera.files.size()) +
+                        " images, and " + fs::path(file).filename().string() + " has no line of its own");
+        camera.times.push_back(times[number]);
+      }
+    }
+    if (extract_) camera.rectifier = MakeRectifier(calibration.entries, id, calibration.path);
+    return camera;
+  }
+
+  // The file of `other` that belongs to left frame i: the same name on sync drives; on extract
+  // drives, whose cameras drop frames independently, the nearest timestamp within kMaxPairingGap.
+  // "" when there is none.
+  std::string Partner(const RawCameraFiles& left, size_t i, const RawCameraFiles& other) const {
+    if (!extract_) {
+      const std::string same_name = JoinPath(other.dir, fs::path(left.files[i]).filename().string());
+      return fs::exists(same_name) ? same_name : "";
+    }
+    const auto next = std::lower_bound(other.times.begin(), other.times.end(), left.times[i]);
+    size_t best = other.times.size();
+    for (auto it : {next - (next != other.times.begin() ? 1 : 0), next}) {
+      if (it == other.times.end()) continue;
+      const size_t j = static_cast<size_t>(it - other.times.begin());
+      if (best == other.times.size() || std::abs(other.times[j] - left.times[i]) < std::abs(other.times[best] - left.times[i])) {
+        best = j;
+      }
+    }
+    if (best == other.times.size() || std::abs(other.times[best] - left.times[i]) >= kMaxPairingGap) return "";
+    return other.files[best];
+  }
+
+  cv::Size RectifiedSize() const { return cv::Size(camera_.left.width, camera_.left.height); }
+  cv::Mat LoadGrey(const std::string& file, const RawRectifier& rectifier) const {
+    if (extract_) return rectifier.Apply(internal::LoadGreyImage(file, rectifier.raw_size));
+    return internal::LoadGreyImage(file, RectifiedSize());
+  }
+  cv::Mat LoadColour(const std::string& file, const RawRectifier& rectifier) const {
+    if (extract_) return rectifier.Apply(internal::LoadColorImage(file, rectifier.raw_size));
+    return internal::LoadColorImage(file, RectifiedSize());
   }
 
   std::string root_;
-  std::vector<std::string> files_, right_files_;
+  std::vector<Frame> frames_;
   std::vector<double> timestamps_;
   StereoCamera camera_;
-  bool stereo_ = false, color_ = false, extract_ = false;
-  RawRectifier left_rectifier_, right_rectifier_;
+  bool stereo_ = false, color_ = false, extract_ = false, colour_is_left_ = false;
+  int colour_missing_ = 0;
+  RawRectifier left_rectifier_, right_rectifier_, colour_left_rectifier_, colour_right_rectifier_;
 };
 
 }  // namespace
@@ -223,8 +311,14 @@ bool IsKittiRawDrive(const std::string& path) {
   return fs::is_directory(JoinPath(path, "image_00/data")) || fs::is_directory(JoinPath(path, "image_02/data"));
 }
 
-std::unique_ptr<SequenceReader> OpenKittiRawSequence(const std::string& path) {
-  return std::make_unique<KittiRawSequence>(path);
+std::unique_ptr<SequenceReader> OpenKittiRawSequence(const std::string& path, CameraPair pair) {
+  return std::make_unique<KittiRawSequence>(path, pair);
+}
+
+CameraPair ParseCameraPair(const std::string& name) {
+  if (name == "grey" || name == "gray") return CameraPair::kGrey;
+  if (name == "colour" || name == "color") return CameraPair::kColour;
+  throw Error("--cameras must be grey or colour, not '" + name + "'");
 }
 
 }  // namespace dvso

@@ -13,13 +13,20 @@ namespace dvso::cli {
 namespace {
 
 struct EvalDepthArgs {
-  std::string pred_dir, gt_dir, calib_path;
+  std::string pred_dir, gt_dir, calib_path, split_path;
   std::string pred_kind = "disparity", gt_kind = "disparity", crop = "none";
   bool json = false;
   DepthEvalOptions options;
 };
 
-void Run(EvalDepthArgs& args) {
+void Run(EvalDepthArgs& args, const CLI::App& cmd) {
+  if (!args.split_path.empty()) {
+    // The paper's protocol (section 5.1, Table 1): Velodyne depth GT, Garg crop, 1e-3 .. 80 m, KITTI fx from
+    // the GT width times 0.54 m; each stays overridable.
+    if (cmd.count("--gt-kind") == 0) args.gt_kind = "depth";
+    if (cmd.count("--crop") == 0) args.crop = "garg";
+    if (cmd.count("--fxb") == 0 && cmd.count("--calib") == 0) args.options.kitti_focal_by_width = true;
+  }
   args.options.pred_kind = ParseMapKind(args.pred_kind);
   args.options.gt_kind = ParseMapKind(args.gt_kind);
   args.options.crop = ParseDepthCrop(args.crop);
@@ -31,13 +38,16 @@ void Run(EvalDepthArgs& args) {
   }
   args.options.Check();
   if (!args.json) {
+    if (!args.split_path.empty()) std::cout << "split        : " << args.split_path << "\n";
     std::cout << "predictions  : " << args.pred_dir << " (" << MapKindName(args.options.pred_kind) << ")\n"
               << "ground truth : " << args.gt_dir << " (" << MapKindName(args.options.gt_kind) << ")\n";
     if (args.options.fxb > 0.0) std::cout << "fx * baseline: " << args.options.fxb << " px m\n";
     if (args.options.kitti_focal_by_width) std::cout << "fx * baseline: KITTI fx by image width x 0.54 m\n";
     std::cout << "\n";
   }
-  const DepthEvalResult result = EvaluateDepthFolders(args.pred_dir, args.gt_dir, args.options);
+  const DepthEvalResult result = args.split_path.empty()
+                                     ? EvaluateDepthFolders(args.pred_dir, args.gt_dir, args.options)
+                                     : EvaluateDepthSplit(args.split_path, args.pred_dir, args.gt_dir, args.options);
   if (args.json) {
     std::cout << DepthEvalResultToJson(result, args.options).dump(2) << std::endl;
   } else {
@@ -51,9 +61,11 @@ void AddEvalDepthCommand(CLI::App& app) {
   auto args = std::make_shared<EvalDepthArgs>();
   auto* cmd = app.add_subcommand(
       "eval-depth", "Depth metrics (abs rel, sq rel, RMSE, RMSE log, delta < 1.25^k) of predicted vs GT maps");
-  cmd->add_option("--pred", args->pred_dir, "folder of predicted KITTI uint16 PNG maps (value / 256)")
+  cmd->add_option("--pred", args->pred_dir,
+                  "folder of predicted KITTI uint16 PNG maps (value / 256); with --split also an .npy stack "
+                  "(N, H, W) of disparities / width, one per split line")
       ->required();
-  cmd->add_option("--gt", args->gt_dir, "folder of GT KITTI uint16 PNG maps with the same file names (0 = invalid)")
+  cmd->add_option("--gt,--gt-dir", args->gt_dir, "folder of GT KITTI uint16 PNG maps with the same file names (0 = invalid)")
       ->required();
   cmd->add_option("--pred-kind", args->pred_kind, "predictions hold depth (m) or disparity (px)")
       ->capture_default_str();
@@ -71,8 +83,11 @@ void AddEvalDepthCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_flag("--median-scaling", args->options.median_scaling,
                 "scale each prediction by median(GT) / median(prediction) (monocular)");
+  cmd->add_option("--split", args->split_path,
+                  "split file ('<drive> <frame> <side>' lines): GT and predictions are %06d.png in split order "
+                  "(gt-depth --split); defaults become the paper's protocol: --gt-kind depth --crop garg --kitti-focal");
   cmd->add_flag("--json", args->json, "print exactly one JSON object on stdout");
-  cmd->callback([args] { Run(*args); });
+  cmd->callback([args, cmd] { Run(*args, *cmd); });
 }
 
 }  // namespace dvso::cli

@@ -4,8 +4,10 @@
 #include <algorithm>
 #include <filesystem>
 #include <iostream>
+#include <map>
 #include <memory>
 
+#include "core/depth_split.h"
 #include "core/disparity_io.h"
 #include "core/error.h"
 #include "core/fs_util.h"
@@ -21,12 +23,52 @@ namespace {
 namespace fs = std::filesystem;
 
 struct GtDepthArgs {
-  std::string drive_dir, out_dir;
+  std::string drive_dir, out_dir, split_path, raw_root;
   int camera = 2;
   bool quiet = false;
 };
 
+// The scan of a drive's frame: .bin (sync) or .txt (extract).
+std::string ScanPath(const std::string& drive_dir, const std::string& frame_name) {
+  const fs::path dir = fs::path(drive_dir) / "velodyne_points" / "data";
+  const fs::path bin = dir / (frame_name + ".bin");
+  if (fs::exists(bin)) return bin.string();
+  const fs::path txt = dir / (frame_name + ".txt");
+  RequireFile(fs::exists(txt), bin.string(), "no Velodyne scan (.bin or .txt) for this split entry");
+  return txt.string();
+}
+
+// One GT map per split line, %06d.png in split order, each in its line's camera (l = 02, r = 03).
+void RunSplit(const GtDepthArgs& args) {
+  Require(!args.raw_root.empty(), "--split needs --raw-root (the folder holding the date folders)");
+  const std::vector<SplitEntry> entries = ReadSplitFile(args.split_path);
+  EnsureDirectory(args.out_dir);
+  std::map<std::pair<std::string, int>, VelodyneProjection> projections;  // per (drive, camera)
+  ProgressBar progress("gt-depth", static_cast<long>(entries.size()));
+  long points = 0;
+  for (size_t i = 0; i < entries.size(); ++i) {
+    const SplitEntry& entry = entries[i];
+    const std::string drive_dir = JoinPath(args.raw_root, entry.drive);
+    RequireFile(fs::is_directory(drive_dir), drive_dir,
+                "drive of split line " + std::to_string(i + 1) + " not found under --raw-root");
+    const auto key = std::make_pair(drive_dir, entry.Camera());
+    if (!projections.count(key)) {
+      projections[key] = ReadVelodyneProjection(FindRawCalibrationDir(drive_dir), entry.Camera());
+    }
+    const cv::Mat depth =
+        ProjectVelodyneDepth(ReadVelodyneScan(ScanPath(drive_dir, entry.FrameName())), projections[key]);
+    points += cv::countNonZero(depth);
+    WriteKittiMapPng(JoinPath(args.out_dir, SplitMapName(static_cast<int>(i))), depth);
+    if (!args.quiet) progress.Update(static_cast<long>(i + 1));
+  }
+  if (!args.quiet) progress.Finish();
+  std::cout << entries.size() << " depth maps in split order (" << points / static_cast<long>(entries.size())
+            << " points/frame) in " << args.out_dir << "\n";
+}
+
 void Run(const GtDepthArgs& args) {
+  Require(args.drive_dir.empty() != args.split_path.empty(), "give exactly one of --sequence DRIVE or --split FILE");
+  if (!args.split_path.empty()) return RunSplit(args);
   const fs::path scans_dir = fs::path(args.drive_dir) / "velodyne_points" / "data";
   RequireFile(fs::is_directory(scans_dir), scans_dir.string(),
               "no Velodyne folder (KITTI raw layout: DRIVE/velodyne_points/data/*.bin)");
@@ -62,7 +104,11 @@ void AddGtDepthCommand(CLI::App& app) {
       "KITTI raw drive: Velodyne scans projected into a rectified camera (nearest point per pixel, points behind "
       "dropped) as KITTI depth PNGs (m * 256), the Eigen-split depth GT of monodepth's generate_depth_map "
       "(0-based pixels: monodepth's maps are shifted by one pixel left and up)");
-  cmd->add_option("--sequence", args->drive_dir, "drive folder with velodyne_points/data/*.bin (sync) or *.txt (extract)")->required();
+  cmd->add_option("--sequence", args->drive_dir, "drive folder with velodyne_points/data/*.bin (sync) or *.txt (extract)");
+  cmd->add_option("--split", args->split_path,
+                  "instead of --sequence: the frames of a split file ('<drive> <frame> <side>'), written as %06d.png "
+                  "in split order, side l in camera 2, r in camera 3 (for eval-depth --split)");
+  cmd->add_option("--raw-root", args->raw_root, "with --split: the folder holding the date folders");
   cmd->add_option("--out", args->out_dir, "output folder (one PNG per scan, named like it)")->required();
   cmd->add_option("--camera", args->camera, "rectified camera: 2 (colour left, the network's) or 0 (grey left)")
       ->capture_default_str();

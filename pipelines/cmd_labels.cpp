@@ -14,7 +14,7 @@ namespace {
 
 struct LabelsArgs {
   std::string sequence, list, out, config, gt_disparity, gt_subdir, gt_disparity_right, gt_subdir_right,
-      preset = "default";
+      preset = "default", cameras = "grey";
   int first = 0, count = -1;
   bool json = false, overwrite = false, quiet = false, worker_thread = false, right_labels = false;
 };
@@ -29,6 +29,7 @@ void RunLabels(const LabelsArgs& args) {
   } else {
     options.odometry = vo::OdometryOptions::Preset(args.preset);
   }
+  options.cameras = ParseCameraPair(args.cameras);
   options.first = args.first;
   options.count = args.count;
   options.labels.overwrite = args.overwrite;
@@ -96,6 +97,8 @@ void AddLabelsCommand(CLI::App& app) {
   cmd->add_flag("--right-labels", args->right_labels, "Also label the right image (OUT/right/%06d.png)");
   cmd->add_option("--gt-disparity-right", args->gt_disparity_right, "GT disparity folder of the right image (e.g. disp_1)");
   cmd->add_option("--gt-subdir-right", args->gt_subdir_right, "Batch: right GT disparity subfolder (e.g. disp_1)");
+  cmd->add_option("--cameras", args->cameras, "KITTI raw drives: the stereo pair to label, grey (00/01) or colour (02/03)")
+      ->capture_default_str();
   cmd->add_option("--first", args->first, "First frame index");
   cmd->add_option("--count", args->count, "Number of frames (-1 = all)");
   cmd->add_flag("--overwrite", args->overwrite, "Rewrite existing label files (default: resume)");

@@ -17,7 +17,7 @@ namespace dvso::cli {
 namespace {
 
 struct OdometryArgs {
-  std::string sequence, mode = "stereo", config, preset = "default", out, camera_file;
+  std::string sequence, mode = "stereo", config, preset = "default", out, camera_file, cameras = "grey";
   int first = 0;
   int count = -1;
   bool ply = false;
@@ -31,7 +31,8 @@ void Run(const OdometryArgs& args) {
   vo::OdometryOptions options = vo::OdometryOptions::Preset(args.preset);
   if (!args.config.empty()) options = vo::LoadOdometryOptions(args.config, options);
   options.Check();
-  const std::unique_ptr<SequenceReader> sequence = OpenSequence(args.sequence, args.camera_file);
+  const std::unique_ptr<SequenceReader> sequence =
+      OpenSequence(args.sequence, args.camera_file, ParseCameraPair(args.cameras));
   const StereoCamera& cam = sequence->camera();
   PredictionSource predictions;
   if (vo::CapabilitiesOf(mode).has_predictions) {
@@ -98,6 +99,8 @@ void AddOdometryCommand(CLI::App& app) {
   cmd->add_option("--first", args->first, "First frame index");
   cmd->add_option("--count", args->count, "Number of frames (-1 = all)");
   cmd->add_option("--camera", args->camera_file, "DSO camera file (image-folder sequences only)");
+  cmd->add_option("--cameras", args->cameras, "KITTI raw drives: grey (00/01) or colour (02/03, read as grey) pair")
+      ->capture_default_str();
   cmd->add_flag("--ply", args->ply, "Also write points.ply (marginalised points)");
   cmd->add_flag("--no-progress", args->no_progress, "No progress bar");
   cmd->add_flag("--strict", args->strict,

@@ -4,6 +4,8 @@
 #include <memory>
 
 #include "core/error.h"
+#include "core/fs_util.h"
+#include "core/kitti_raw_writer.h"
 #include "core/simulator.h"
 #include "pipelines/commands.h"
 
@@ -18,7 +20,11 @@ struct SimulateArgs {
   bool no_exposure = false, no_vignetting = false, no_noise = false, no_shadows = false, no_edge_aa = false,
        quiet = false;
   std::string appearance = "fixed";  // fixed | varied
+  std::string raw_layout = "none";   // none | sync | extract
+  std::string raw_out;               // root of the raw date folder (default OUT/kitti_raw)
+  int raw_drop_every = 0;            // extract: the right cameras lose every n-th frame
   SimulatorOptions options;
+  KittiRawDriveOptions raw;
 };
 
 void Run(SimulateArgs& args) {
@@ -41,6 +47,18 @@ void Run(SimulateArgs& args) {
   o.edge_antialiasing = !args.no_edge_aa;
   o.vary_appearance = args.appearance == "varied";
   o.Check();
+  Require(args.raw_layout == "none" || args.raw_layout == "sync" || args.raw_layout == "extract",
+          "--raw-layout must be none, sync or extract");
+  Require(args.raw_drop_every >= 0, "--raw-drop-every must be >= 0");
+  Require(args.raw_drop_every == 0 || args.raw_layout == "extract", "--raw-drop-every needs --raw-layout extract");
+  args.raw.extract = args.raw_layout == "extract";
+  if (args.raw_drop_every > 0) {
+    // Frame 0 is kept, so the drive always starts with a stereo pair.
+    for (int i = args.raw_drop_every; i < (o.num_frames < 0 ? 1000000 : o.num_frames); i += args.raw_drop_every) {
+      args.raw.right_dropped.push_back(i);
+    }
+  }
+  args.raw.Check();
   const auto& c = o.camera.left;
   std::cout << "output      : " << args.output_dir << "\n"
             << "trajectory  : " << (o.trajectory_path.empty() ? "generated driving path" : o.trajectory_path)
@@ -56,6 +74,13 @@ void Run(SimulateArgs& args) {
   const SimulationSummary summary = WriteSimulatedSequence(o, args.output_dir, !args.quiet);
   std::cout << "wrote " << summary.frames << " frames (" << summary.path_length << " m) in " << summary.seconds
             << " s: " << summary.frames / std::max(summary.seconds, 1e-9) << " frames/s\n";
+  if (args.raw_layout != "none") {
+    const std::string root = args.raw_out.empty() ? JoinPath(args.output_dir, "kitti_raw") : args.raw_out;
+    const KittiRawDriveSummary raw = WriteKittiRawDrive(args.output_dir, root, args.raw, !args.quiet);
+    std::cout << "raw drive   : " << raw.drive_dir << " (" << raw.frames << " frames, " << raw.right_dropped
+              << " dropped by the right camera" << (raw.color ? "s" : "") << ", "
+              << raw.velodyne_points / std::max(raw.frames, 1) << " Velodyne points/scan, OXTS)\n";
+  }
 }
 
 }  // namespace
@@ -108,6 +133,14 @@ void AddSimulateCommand(CLI::App& app) {
                   "fixed: the original look; varied: light, sky, colours, textures, car shapes, exposure and "
                   "camera height drawn from the seed")
       ->check(CLI::IsMember({"fixed", "varied"}))
+      ->capture_default_str();
+  cmd->add_option("--raw-layout", args->raw_layout,
+                  "also write the sequence as a KITTI raw drive: sync (rectified) or extract (distorted, "
+                  "unrectified), with Velodyne scans, OXTS packets and calibration (core/kitti_raw_writer.h)")
+      ->capture_default_str();
+  cmd->add_option("--raw-out", args->raw_out, "root of the raw date folder (default OUT/kitti_raw)");
+  cmd->add_option("--raw-drop-every", args->raw_drop_every,
+                  "extract drives: the right cameras lose every n-th frame (0 = none)")
       ->capture_default_str();
   cmd->add_flag("--quiet", args->quiet, "no progress bar");
   cmd->callback([args] { Run(*args); });

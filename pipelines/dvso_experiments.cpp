@@ -60,6 +60,8 @@ void AddExperimentOptions(CLI::App* cmd, ExperimentArgs* args) {
   cmd->add_option("--config", args->config, "Odometry YAML options (strict keys)");
   cmd->add_option("--preset", args->preset, "default | fast")->check(CLI::IsMember({"default", "fast"}));
   cmd->add_option("--camera", args->camera_file, "DSO camera file (image-folder sequences only)");
+  cmd->add_option("--cameras", args->cameras, "KITTI raw drives: grey (00/01) or colour (02/03, read as grey) pair")
+      ->capture_default_str();
   cmd->add_flag("--json", args->json, "Print exactly one JSON object on stdout");
   AddPredictionOptions(cmd, &args->predictions);
 }
@@ -68,7 +70,7 @@ ExperimentSetup OpenExperiment(const ExperimentArgs& args) {
   ExperimentSetup setup;
   setup.options = vo::OdometryOptions::Preset(args.preset);
   if (!args.config.empty()) setup.options = vo::LoadOdometryOptions(args.config, setup.options);
-  setup.sequence = OpenSequence(args.sequence, args.camera_file);
+  setup.sequence = OpenSequence(args.sequence, args.camera_file, ParseCameraPair(args.cameras));
   setup.gt = ReadTrajectory(args.gt, TrajectoryFormat::kKitti);
   const int frames = args.count < 0 ? setup.sequence->size() : std::min(args.count, setup.sequence->size());
   RequireFile(static_cast<int>(setup.gt.size()) >= frames, args.gt,

@@ -41,7 +41,7 @@ VariantResult RunVariant(const std::string& name, const SequenceReader& sequence
 
 // Options both experiment commands take.
 struct ExperimentArgs {
-  std::string sequence, gt, out, config, preset = "default", camera_file;
+  std::string sequence, gt, out, config, preset = "default", camera_file, cameras = "grey";
   int count = -1;
   bool json = false;
   PredictionSourceArgs predictions;

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "core/sequence.h"
 #include "sdso_labels/label_stats.h"
 #include "sdso_labels/label_writer.h"
 #include "vo/system/odometry_options.h"
@@ -19,6 +20,7 @@ struct LabelRunOptions {
   int count = -1;                   // frames per sequence (-1 = all)
   std::string gt_disparity_dir;     // optional GT disparity folder (%06d.png) for accuracy statistics
   std::string gt_disparity_right_dir;  // the same for right-image labels (e.g. the simulator's disp_1/)
+  CameraPair cameras = CameraPair::kGrey;  // the stereo pair of a KITTI raw drive (grey 00/01 or colour 02/03)
   bool progress = true;             // progress bars on stderr
   // Produce labels on a worker thread beside the odometry. Off by default: on
   // the 2-core target the window optimisation already uses both cores (bench_labels).

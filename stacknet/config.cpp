@@ -81,6 +81,7 @@ template <typename Map>
 void VisitData(Map& m, DataOptions& o) {
   m.Get("sequences", &o.sequences);
   m.Get("split_file", &o.split_file);
+  m.Get("split_root", &o.split_root);
   m.Get("label_dir_left", &o.label_dir_left);
   m.Get("label_dir_right", &o.label_dir_right);
   m.Get("gt_disparity_left", &o.gt_disparity_left);

@@ -2,14 +2,16 @@
 
 #include <algorithm>
 #include <filesystem>
-#include <fstream>
+#include <map>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 
+#include "core/depth_split.h"
 #include "core/disparity_io.h"
 #include "core/error.h"
 #include "core/fs_util.h"
+#include "stacknet/augmentation.h"
 
 namespace dvso::stacknet {
 namespace fs = std::filesystem;
@@ -44,18 +46,6 @@ void LabelToTensors(const cv::Mat& label, int width, int height, torch::Tensor* 
   const torch::Tensor pixels = torch::from_blob(contiguous.data, {1, height, width}, torch::kFloat32).clone();
   *mask = (pixels > 0).to(torch::kFloat32);
   *value = pixels / static_cast<double>(width);
-}
-
-std::vector<std::string> SortedImages(const std::string& dir) {
-  std::vector<std::string> files;
-  for (const auto& entry : fs::directory_iterator(dir)) {
-    const std::string ext = entry.path().extension().string();
-    if (entry.is_regular_file() && (ext == ".png" || ext == ".jpg" || ext == ".jpeg")) {
-      files.push_back(entry.path().string());
-    }
-  }
-  std::sort(files.begin(), files.end());
-  return files;
 }
 
 }  // namespace
@@ -96,56 +86,53 @@ StereoDataset::StereoDataset(const DataOptions& options, int network_width, int 
     : options_(options), width_(network_width), height_(network_height) {
   options_.Check();
   if (!options_.split_file.empty()) {
-    std::ifstream split(options_.split_file);
-    RequireFile(split.good(), options_.split_file, "cannot open split file");
-    const fs::path base = fs::path(options_.split_file).parent_path();
-    std::string line;
-    int line_number = 0;
-    while (std::getline(split, line)) {
-      ++line_number;
-      if (line.empty() || line[0] == '#') continue;
-      std::istringstream fields(line);
-      std::string root;
-      int frame = -1;
-      RequireFile(static_cast<bool>(fields >> root >> frame) && frame >= 0, options_.split_file,
-                  "line " + std::to_string(line_number) + ": expected '<sequence> <frame>'");
-      if (fs::path(root).is_relative() && !fs::exists(root)) root = (base / root).string();
-      int seq = -1;
-      for (size_t i = 0; i < sequences_.size(); ++i) {
-        if (sequences_[i].root == root) seq = static_cast<int>(i);
-      }
-      if (seq < 0) {
-        AddSequence(root);
-        seq = static_cast<int>(sequences_.size()) - 1;
-      }
-      items_.push_back({seq, frame});
-    }
+    AddSplit(options_.split_file);
   } else {
     for (const auto& root : options_.sequences) {
-      AddSequence(root);
-      const Sequence& s = sequences_.back();
-      const int frames = s.reader ? s.reader->size() : static_cast<int>(s.raw_left.size());
-      for (int f = 0; f < frames; f += options_.frame_step) {
-        items_.push_back({static_cast<int>(sequences_.size()) - 1, f});
-      }
+      const int seq = AddSequence(root);
+      for (int f = 0; f < sequences_[seq].reader->size(); f += options_.frame_step) items_.push_back({seq, f});
     }
   }
   Require(!items_.empty(), "dataset: no training frames found");
 }
 
-void StereoDataset::AddSequence(const std::string& root) {
+void StereoDataset::AddSplit(const std::string& split_file) {
+  const fs::path base = options_.split_root.empty() ? fs::path(split_file).parent_path() : fs::path(options_.split_root);
+  // Split frames are file numbers ("0000000069"); a reader's index differs from it where
+  // cameras dropped frames (extract drives), so look the number up among the frame names.
+  std::vector<std::map<long long, int>> index_of_number;
+  for (const SplitEntry& entry : ReadSplitFile(split_file)) {
+    const std::string root = fs::path(entry.drive).is_absolute() ? entry.drive : (base / entry.drive).string();
+    const int seq = AddSequence(root);
+    if (static_cast<int>(index_of_number.size()) <= seq) index_of_number.resize(seq + 1);
+    std::map<long long, int>& numbers = index_of_number[seq];
+    if (numbers.empty()) {
+      const SequenceReader& reader = *sequences_[seq].reader;
+      for (int i = 0; i < reader.size(); ++i) {
+        const std::string name = reader.FrameName(i);
+        if (!name.empty() && name.size() <= 12 && name.find_first_not_of("0123456789") == std::string::npos) {
+          numbers[std::stoll(name)] = i;
+        }
+      }
+    }
+    const auto found = numbers.find(entry.frame);
+    RequireFile(found != numbers.end(), split_file,
+                "frame " + entry.FrameName() + " of " + entry.drive + " is not a stereo pair of that sequence");
+    items_.push_back({seq, found->second, entry.side == 'r'});
+  }
+}
+
+int StereoDataset::AddSequence(const std::string& root) {
+  for (size_t i = 0; i < sequences_.size(); ++i) {
+    if (sequences_[i].root == root) return static_cast<int>(i);
+  }
   Sequence seq;
   seq.root = root;
   RequireFile(fs::is_directory(root), root, "sequence folder not found");
-  if (fs::is_directory(JoinPath(root, "image_02/data")) && fs::is_directory(JoinPath(root, "image_03/data"))) {
-    seq.raw_left = SortedImages(JoinPath(root, "image_02/data"));
-    seq.raw_right = SortedImages(JoinPath(root, "image_03/data"));
-    RequireFile(seq.raw_left.size() == seq.raw_right.size() && !seq.raw_left.empty(), root,
-                "KITTI raw drive: image_02 and image_03 must hold the same non-zero number of images");
-  } else {
-    seq.reader = OpenSequence(root);
-    RequireFile(seq.reader->is_stereo(), root, "training needs a stereo sequence");
-  }
+  // The network learns from the colour pair of a raw drive (paper 5.1: KITTI raw, cameras 02/03).
+  const CameraPair pair = IsKittiRawDrive(root) ? CameraPair::kColour : CameraPair::kGrey;
+  seq.reader = OpenSequence(root, "", pair);
+  RequireFile(seq.reader->is_stereo(), root, "training needs a stereo sequence");
   auto dir_if_exists = [&](const std::string& name) {
     if (name.empty()) return std::string();
     const std::string dir = fs::path(name).is_absolute() ? name : JoinPath(root, name);
@@ -160,25 +147,17 @@ void StereoDataset::AddSequence(const std::string& root) {
     seq.labels_are_dense_gt = !seq.left_labels.empty() || !seq.right_labels.empty();
   }
   sequences_.push_back(std::move(seq));
+  return static_cast<int>(sequences_.size()) - 1;
 }
 
 void StereoDataset::ReadImages(const Sequence& seq, int frame, cv::Mat* left, cv::Mat* right) const {
-  if (seq.reader) {
-    RequireFile(frame < seq.reader->size(), seq.root, "frame " + std::to_string(frame) + " out of range");
-    SequenceReadOptions read;
-    read.load_color = options_.use_color && seq.reader->has_color();
-    const StereoFrame f = seq.reader->Read(frame, read);
-    const bool color = !f.left_color.empty() && !f.right_color.empty();
-    *left = color ? f.left_color : f.left;
-    *right = color ? f.right_color : f.right;
-    return;
-  }
-  RequireFile(frame < static_cast<int>(seq.raw_left.size()), seq.root, "frame out of range");
-  const int mode = options_.use_color ? cv::IMREAD_COLOR : cv::IMREAD_GRAYSCALE;
-  *left = cv::imread(seq.raw_left[frame], mode);
-  *right = cv::imread(seq.raw_right[frame], mode);
-  RequireFile(!left->empty(), seq.raw_left[frame], "cannot read image");
-  RequireFile(!right->empty(), seq.raw_right[frame], "cannot read image");
+  RequireFile(frame < seq.reader->size(), seq.root, "frame " + std::to_string(frame) + " out of range");
+  SequenceReadOptions read;
+  read.load_color = options_.use_color && seq.reader->has_color();
+  const StereoFrame f = seq.reader->Read(frame, read);
+  const bool color = !f.left_color.empty() && !f.right_color.empty();
+  *left = color ? f.left_color : f.left;
+  *right = color ? f.right_color : f.right;
 }
 
 cv::Mat StereoDataset::ReadLabel(const Sequence& seq, const std::string& dir, int frame, int side) const {
@@ -205,7 +184,7 @@ StereoSample StereoDataset::Load(int index) const {
   s.right = ImageToTensor(right, width_, height_);
   LabelToTensors(ReadLabel(seq, seq.left_labels, item.frame, 0), width_, height_, &s.left_label, &s.left_mask);
   LabelToTensors(ReadLabel(seq, seq.right_labels, item.frame, 1), width_, height_, &s.right_label, &s.right_mask);
-  return s;
+  return item.mirrored ? FlipAndSwap(s) : s;
 }
 
 std::string StereoDataset::Describe() const {

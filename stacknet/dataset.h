@@ -32,8 +32,9 @@ cv::Mat ResizeSparseDisparity(const cv::Mat& sparse, int width, int height);
 // as sparse labels; deterministic for a given seed.
 cv::Mat SampleSparse(const cv::Mat& dense, double fraction, uint64_t seed);
 
-// A KITTI raw drive (image_02/data, image_03/data) opened as stereo pairs; the
-// core readers cover the odometry layout and the simulator.
+// Stereo pairs from the core sequence readers (KITTI odometry layout, the
+// simulator, KITTI raw drives through their colour pair 02/03, rectified on read
+// for _extract drives), all frames of `sequences` or the lines of `split_file`.
 class StereoDataset {
  public:
   StereoDataset(const DataOptions& options, int network_width, int network_height);
@@ -46,16 +47,17 @@ class StereoDataset {
  private:
   struct Sequence {
     std::string root;
-    std::unique_ptr<SequenceReader> reader;           // core reader (odometry layout / simulator)
-    std::vector<std::string> raw_left, raw_right;     // KITTI raw drive images when reader is null
+    std::unique_ptr<SequenceReader> reader;
     std::string left_labels, right_labels;            // label folders ("" = none)
     bool labels_are_dense_gt = false;                 // sample them sparsely (simulator fallback)
   };
   struct Item {
     int sequence;
-    int frame;
+    int frame;                  // reader index
+    bool mirrored = false;      // split side 'r': the right view is the network's left (FlipAndSwap)
   };
-  void AddSequence(const std::string& root);
+  int AddSequence(const std::string& root);  // index of the (possibly already open) sequence
+  void AddSplit(const std::string& split_file);
   void ReadImages(const Sequence& seq, int frame, cv::Mat* left, cv::Mat* right) const;
   cv::Mat ReadLabel(const Sequence& seq, const std::string& dir, int frame, int side) const;
 

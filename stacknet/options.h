@@ -44,7 +44,8 @@ struct LossOptions {
 // Where training pairs come from.
 struct DataOptions {
   std::vector<std::string> sequences;  // stereo sequence folders (KITTI odometry layout / dvso simulate / KITTI raw drive)
-  std::string split_file;              // optional text file "<sequence> <frame>" per line, overrides all frames
+  std::string split_file;              // optional monodepth split "<drive> <frame> <side>" per line (core/depth_split.h), overrides all frames
+  std::string split_root = "";         // folder the split's drive paths are relative to; "" = the split file's folder
   std::string label_dir_left = "labels";    // per-sequence folder of sparse left labels (uint16 PNG); "" = none
   std::string label_dir_right = "";         // per-sequence folder of sparse right labels; "" = none
   std::string gt_disparity_left = "disp_0"; // fallback when a sequence has no label folder: sample its GT

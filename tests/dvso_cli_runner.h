@@ -33,14 +33,14 @@ inline CliRun RunDvso(const std::string& args, bool merge_stderr = true) {
 }
 
 // Makes a fresh folder `name` under the test temp dir and simulates `frames`
-// small frames (320x96) into <folder>/seq with `dvso simulate`. Returns the
-// folder ("" when the simulation failed).
-inline std::string FreshSimulatedSequence(const std::string& name, int frames) {
+// small frames (320x96) into <folder>/seq with `dvso simulate` (plus
+// `extra_args`). Returns the folder ("" when the simulation failed).
+inline std::string FreshSimulatedSequence(const std::string& name, int frames, const std::string& extra_args = "") {
   const std::string dir = ::testing::TempDir() + "/" + name;
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   const CliRun sim = RunDvso("simulate --quiet --out " + dir + "/seq --count " + std::to_string(frames) +
-                             " --width 320 --height 96 --texture-size 128");
+                             " --width 320 --height 96 --texture-size 128 " + extra_args);
   return sim.exit_code == 0 ? dir : "";
 }
 

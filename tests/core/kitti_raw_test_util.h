@@ -1,10 +1,12 @@
-// A KITTI raw date folder's calibration files with KITTI-like values, written for tests of the
-// raw readers (OXTS poses, Velodyne depth).
+// A KITTI raw date folder's calibration files with KITTI-like values (the rig of
+// core/kitti_raw_writer.h), written for tests of the raw readers (OXTS poses, Velodyne depth).
 #pragma once
 
 #include <Eigen/Geometry>
 #include <filesystem>
 #include <fstream>
+
+#include "core/kitti_raw_writer.h"
 
 namespace dvso::testing {
 
@@ -35,12 +37,10 @@ struct RawCalibration {
 // Writes calib_imu_to_velo.txt, calib_velo_to_cam.txt and calib_cam_to_cam.txt (1242x375 rectified).
 inline RawCalibration WriteRawCalibration(const std::filesystem::path& dir) {
   RawCalibration c;
-  c.velo_from_imu = Rigid(Eigen::AngleAxisd(0.01, Eigen::Vector3d::UnitZ()).toRotationMatrix(), {-0.81, 0.32, -0.80});
-  Eigen::Matrix3d axes;  // Velodyne x forward, y left, z up -> camera x right, y down, z forward
-  axes << 0, -1, 0, 0, 0, -1, 1, 0, 0;
-  c.cam0_from_velo =
-      Rigid(Eigen::AngleAxisd(0.02, Eigen::Vector3d::UnitX()).toRotationMatrix() * axes, {-0.004, -0.076, -0.27});
-  c.rect = Eigen::AngleAxisd(0.005, Eigen::Vector3d(0.3, 1, 0.2).normalized()).toRotationMatrix();
+  const KittiRawRig rig = KittiRawRig::KittiLike();  // the simulator's raw drives use the same rig
+  c.velo_from_imu = rig.velo_from_imu;
+  c.cam0_from_velo = rig.cam0_from_velo;
+  c.rect = rig.rect_from_cam0;
   c.P_rect_02 << c.fx, 0, 609.5593, 44.85728, 0, c.fx, 172.854, 0.2163791, 0, 0, 1, 0.002745884;
   WriteRigidCalibration(dir / "calib_imu_to_velo.txt", c.velo_from_imu);
   WriteRigidCalibration(dir / "calib_velo_to_cam.txt", c.cam0_from_velo);

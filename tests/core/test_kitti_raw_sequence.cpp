@@ -1,20 +1,22 @@
-// KITTI raw rectified drive reader (core/sequence_kitti_raw.cpp): a simulated
-// KITTI-odometry-layout sequence rewritten in the raw layout (date folder with
-// calib_cam_to_cam.txt, DRIVE/image_0X/data/%010d.png, timestamps.txt) must
-// read back as the same camera, images and times, and stereo odometry on it
-// must give the same trajectory; a frame missing in the right camera is
-// skipped, not paired with a neighbour.
+// KITTI raw drives end to end on drives the simulator writes in the raw layout
+// (`dvso simulate --raw-layout sync|extract`, core/kitti_raw_writer.h): the
+// raw reader (core/sequence_kitti_raw.cpp) must give the same camera, images
+// and times as the KITTI-odometry-layout copy of the same simulation; every
+// odometry mode and the labels must give the same result on both; gt-depth
+// must give back the simulator's depth at the Velodyne pixels; OXTS poses must
+// round-trip; extract drives are rectified on read and paired by timestamp.
 #include <gtest/gtest.h>
 
-#include <cstdio>
 #include <filesystem>
 #include <fstream>
 
-#include <opencv2/calib3d.hpp>
+#include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
 
+#include "core/depth_split.h"
+#include "core/disparity_io.h"
 #include "core/error.h"
+#include "core/kitti_velodyne.h"
 #include "core/sequence.h"
 #include "core/trajectory.h"
 #include "tests/dvso_cli_runner.h"
@@ -24,23 +26,28 @@ namespace fs = std::filesystem;
 namespace dvso {
 namespace {
 
+constexpr int kFrames = 40;
+const char* const kSyncDrive = "kitti_raw/2011_09_26/2011_09_26_drive_0001_sync";
+const char* const kExtractDrive = "kitti_raw/2011_09_26/2011_09_26_drive_0001_extract";
+
 TEST(KittiRawSequence, TimestampsAreSecondsSinceTheEpochUtc) {
   EXPECT_NEAR(ParseKittiRawTimestamp("2011-09-26 13:02:25.964389445", "t"), 1317042145.964389445, 1e-6);
   EXPECT_NEAR(ParseKittiRawTimestamp("2011-09-26 13:02:26", "t"), 1317042146.0, 1e-9);
   EXPECT_THROW(ParseKittiRawTimestamp("13:02:25 2011-09-26", "t"), Error);
+  EXPECT_EQ(FormatKittiRawTimestamp(1317042146.0), "2011-09-26 13:02:26.000000000");
+  // The fraction rounds up into the next minute instead of printing 60 s or 1000000000 ns.
+  EXPECT_EQ(FormatKittiRawTimestamp(1317042179.9999999999), "2011-09-26 13:03:00.000000000");
+  for (double t : {1317042145.25, 1317042199.1234567, 1317045000.5}) {
+    EXPECT_NEAR(ParseKittiRawTimestamp(FormatKittiRawTimestamp(t), "t"), t, 1e-6);
+  }
 }
 
-std::string RawName(int i, const char* ext) {
-  char name[32];
-  std::snprintf(name, sizeof(name), "%010d%s", i, ext);
-  return name;
-}
-
-// `dvso odometry --mode stereo` of `sequence` into `out`: its trajectory, or an empty one (and a test
-// failure naming the output) when the run fails.
-Trajectory StereoOdometry(const fs::path& sequence, const fs::path& out) {
-  const testing::CliRun run =
-      testing::RunDvso("odometry --no-progress --mode stereo --sequence " + sequence.string() + " --out " + out.string());
+// `dvso odometry --mode MODE` of `sequence` into `out` (+ extra arguments): its trajectory, or an empty
+// one (and a test failure with the output) when the run fails.
+Trajectory Odometry(const std::string& mode, const fs::path& sequence, const fs::path& out,
+                    const std::string& extra = "") {
+  const testing::CliRun run = testing::RunDvso("odometry --no-progress --mode " + mode + " --sequence " +
+                                               sequence.string() + " --out " + out.string() + " " + extra);
   if (run.exit_code != 0) {
     ADD_FAILURE() << run.out;
     return {};
@@ -48,158 +55,291 @@ Trajectory StereoOdometry(const fs::path& sequence, const fs::path& out) {
   return ReadTrajectory((out / "trajectory.txt").string());
 }
 
-// Rewrites `seq` (KITTI odometry layout, grey pair) as date_dir/2011_09_26_drive_0001_sync.
-fs::path WriteAsRawDrive(const fs::path& seq, const fs::path& date_dir) {
-  const fs::path drive = date_dir / "2011_09_26_drive_0001_sync";
-  const std::unique_ptr<SequenceReader> reader = OpenSequence(seq.string());
-  const StereoCamera& cam = reader->camera();
-  std::ofstream calib(date_dir / "calib_cam_to_cam.txt");
-  calib.precision(17);
-  calib << "calib_time: 09-Jan-2012 13:57:47\nS_rect_00: " << cam.left.width << " " << cam.left.height
-        << "\nP_rect_00: " << cam.left.fx << " 0 " << cam.left.cx << " 0 0 " << cam.left.fy << " " << cam.left.cy
-        << " 0 0 0 1 0\nP_rect_01: " << cam.left.fx << " 0 " << cam.left.cx << " " << -cam.left.fx * cam.baseline
-        << " 0 " << cam.left.fy << " " << cam.left.cy << " 0 0 0 1 0\n";
-  for (const char* id : {"00", "01"}) {
-    fs::create_directories(drive / ("image_" + std::string(id)) / "data");
-    std::ofstream times(drive / ("image_" + std::string(id)) / "timestamps.txt");
-    for (int i = 0; i < reader->size(); ++i) {
-      const double t = reader->timestamps()[i];
-      char stamp[64];
-      std::snprintf(stamp, sizeof(stamp), "2011-09-26 13:02:%02d.%09d", 10 + static_cast<int>(t),
-                    static_cast<int>(std::lround((t - std::floor(t)) * 1e9)));
-      times << stamp << "\n";
-      const fs::path from = seq / (id == std::string("00") ? "image_0" : "image_1") / (reader->FrameName(i) + ".png");
-      fs::copy_file(from, drive / ("image_" + std::string(id)) / "data" / RawName(i, ".png"));
-    }
-  }
-  return drive;
+double FinalGap(const Trajectory& a, const Trajectory& b) {
+  return (a.poses.back().T_world_camera.translation() - b.poses.back().T_world_camera.translation()).norm();
 }
 
-TEST(KittiRawSequence, RawDriveReadsAndRunsLikeTheOdometryLayout) {
-  const std::string dir = testing::FreshSimulatedSequence("kitti_raw_sequence", 40);
-  ASSERT_FALSE(dir.empty());
-  const fs::path seq = fs::path(dir) / "seq";
-  const fs::path drive = WriteAsRawDrive(seq, fs::path(dir));
+// Copies the simulator's GT disparity maps (%06d.png) under the raw drive's frame names (%010d.png).
+fs::path RenamedDisparities(const fs::path& seq, const std::string& sub, const fs::path& out) {
+  fs::create_directories(out);
+  for (int i = 0; i < kFrames; ++i) {
+    char from[32], to[32];
+    std::snprintf(from, sizeof(from), "%06d.png", i);
+    std::snprintf(to, sizeof(to), "%010d.png", i);
+    fs::copy_file(seq / sub / from, out / to, fs::copy_options::overwrite_existing);
+  }
+  return out;
+}
 
-  const std::unique_ptr<SequenceReader> odometry_layout = OpenSequence(seq.string());
-  const std::unique_ptr<SequenceReader> raw = OpenSequence(drive.string());
+// Every GT pixel of `gt_dir`'s frame `raw_name` equals the simulator's depth (depth_0) within 1 cm; returns
+// the number of GT pixels.
+int CheckGtDepth(const fs::path& gt_dir, const std::string& raw_name, const fs::path& sim_depth) {
+  const cv::Mat gt = ReadKittiMapPng((gt_dir / (raw_name + ".png")).string());
+  const cv::Mat sim = ReadKittiMapPng(sim_depth.string());
+  EXPECT_EQ(gt.size(), sim.size());
+  if (gt.size() != sim.size()) return 0;
+  int points = 0;
+  double worst = 0.0;
+  for (int v = 0; v < gt.rows; ++v) {
+    for (int u = 0; u < gt.cols; ++u) {
+      const float z = gt.at<float>(v, u);
+      if (z <= 0) continue;
+      ++points;
+      worst = std::max(worst, static_cast<double>(std::abs(z - sim.at<float>(v, u))));
+    }
+  }
+  EXPECT_LT(worst, 0.01) << raw_name;
+  return points;
+}
+
+// One simulation written in both layouts, shared by the tests below.
+class SyncDrive : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new std::string(testing::FreshSimulatedSequence("kitti_raw_sync", kFrames, "--color --raw-layout sync"));
+  }
+  static void TearDownTestSuite() {
+    delete dir_;
+    dir_ = nullptr;
+  }
+  void SetUp() override { ASSERT_FALSE(dir_->empty()) << "dvso simulate --raw-layout sync failed"; }
+  fs::path Dir() const { return *dir_; }
+  fs::path Seq() const { return Dir() / "seq"; }
+  fs::path Drive() const { return Seq() / kSyncDrive; }
+  static std::string* dir_;
+};
+std::string* SyncDrive::dir_ = nullptr;
+
+TEST_F(SyncDrive, ReadsLikeTheOdometryLayout) {
+  const std::unique_ptr<SequenceReader> odometry_layout = OpenSequence(Seq().string());
+  const std::unique_ptr<SequenceReader> raw = OpenSequence(Drive().string());
   ASSERT_EQ(raw->size(), odometry_layout->size());
   ASSERT_TRUE(raw->is_stereo());
+  ASSERT_TRUE(raw->has_color());
   EXPECT_NEAR(raw->camera().left.fx, odometry_layout->camera().left.fx, 1e-9);
   EXPECT_NEAR(raw->camera().left.cy, odometry_layout->camera().left.cy, 1e-9);
   EXPECT_NEAR(raw->camera().baseline, odometry_layout->camera().baseline, 1e-9);
   EXPECT_EQ(raw->FrameName(7), "0000000007");
+  SequenceReadOptions colour;
+  colour.load_color = true;
   for (int i : {0, 13, 39}) {
     EXPECT_NEAR(raw->timestamps()[i], odometry_layout->timestamps()[i] - odometry_layout->timestamps()[0], 1e-6);
-    const StereoFrame a = raw->Read(i), b = odometry_layout->Read(i);
+    const StereoFrame a = raw->Read(i, colour), b = odometry_layout->Read(i, colour);
     EXPECT_EQ(cv::norm(a.left, b.left, cv::NORM_INF), 0.0);
     EXPECT_EQ(cv::norm(a.right, b.right, cv::NORM_INF), 0.0);
+    EXPECT_EQ(cv::norm(a.left_color, b.left_color, cv::NORM_INF), 0.0);
+    EXPECT_EQ(cv::norm(a.right_color, b.right_color, cv::NORM_INF), 0.0);
   }
-
-  // Stereo odometry on both layouts: the same trajectory.
-  const Trajectory a = StereoOdometry(seq, fs::path(dir) / "out_odometry");
-  const Trajectory b = StereoOdometry(drive, fs::path(dir) / "out_raw");
-  ASSERT_FALSE(a.empty() || b.empty());
-  ASSERT_EQ(a.size(), b.size());
-  EXPECT_LT((a.poses.back().T_world_camera.translation() - b.poses.back().T_world_camera.translation()).norm(), 1e-3);
-
-  // A frame without its right image is skipped, and the rest stay paired by name.
-  fs::remove(drive / "image_01" / "data" / RawName(5, ".png"));
-  const std::unique_ptr<SequenceReader> gappy = OpenSequence(drive.string());
-  ASSERT_EQ(gappy->size(), odometry_layout->size() - 1);
-  EXPECT_EQ(gappy->FrameName(5), "0000000006");
-  EXPECT_EQ(cv::norm(gappy->Read(5).right, odometry_layout->Read(6).right, cv::NORM_INF), 0.0);
+  // The colour pair as the sequence: the same camera, grey from colour.
+  const std::unique_ptr<SequenceReader> colour_pair = OpenSequence(Drive().string(), "", CameraPair::kColour);
+  ASSERT_EQ(colour_pair->size(), raw->size());
+  EXPECT_NEAR(colour_pair->camera().baseline, raw->camera().baseline, 1e-9);
+  const StereoFrame c = colour_pair->Read(5, colour);
+  EXPECT_EQ(c.left.type(), CV_8UC1);
+  EXPECT_EQ(c.left_color.type(), CV_8UC3);
+  // --cameras colour on a layout without a colour pair choice is an error naming the sequence.
+  EXPECT_THROW(OpenSequence(Seq().string(), "", CameraPair::kColour), Error);
 }
 
-// Rewrites `seq` as an unrectified extract drive: images distorted with D = (k1, k2, 0, 0, 0) (R_rect = I),
-// each camera numbering its own frames, and the right camera dropping frame `dropped`.
-fs::path WriteAsExtractDrive(const fs::path& seq, const fs::path& date_dir, int dropped) {
-  const fs::path drive = date_dir / "2011_09_26_drive_0001_extract";
-  const std::unique_ptr<SequenceReader> reader = OpenSequence(seq.string());
-  const StereoCamera& cam = reader->camera();
-  const cv::Size size(cam.left.width, cam.left.height);
-  const cv::Mat K = (cv::Mat_<double>(3, 3) << cam.left.fx, 0, cam.left.cx, 0, cam.left.fy, cam.left.cy, 0, 0, 1);
-  const cv::Mat D = (cv::Mat_<double>(1, 5) << -0.08, 0.03, 0, 0, 0);
-  // Distorted pixel -> rectified pixel, to sample the rectified image at.
-  std::vector<cv::Point2f> grid;
-  for (int v = 0; v < size.height; ++v)
-    for (int u = 0; u < size.width; ++u) grid.emplace_back(static_cast<float>(u), static_cast<float>(v));
-  std::vector<cv::Point2f> rectified;
-  cv::undistortPoints(grid, rectified, K, D, cv::noArray(), K);
-  cv::Mat map_x(size, CV_32F), map_y(size, CV_32F);
-  for (size_t i = 0; i < grid.size(); ++i) {
-    map_x.at<float>(static_cast<int>(grid[i].y), static_cast<int>(grid[i].x)) = rectified[i].x;
-    map_y.at<float>(static_cast<int>(grid[i].y), static_cast<int>(grid[i].x)) = rectified[i].y;
+TEST_F(SyncDrive, FrameWithoutItsRightImageIsSkippedNotMispaired) {
+  const fs::path copy = Dir() / "gappy" / "2011_09_26_drive_0001_sync";
+  fs::create_directories(copy.parent_path());
+  fs::copy(Drive(), copy, fs::copy_options::recursive);
+  for (const char* file : {"calib_cam_to_cam.txt", "calib_velo_to_cam.txt", "calib_imu_to_velo.txt"}) {
+    fs::copy_file(Drive().parent_path() / file, copy.parent_path() / file);
   }
-  std::ofstream calib(date_dir / "calib_cam_to_cam.txt");
-  calib.precision(17);
-  for (int id : {0, 1}) {
-    const double tx = id == 0 ? 0.0 : -cam.left.fx * cam.baseline;
-    calib << "S_0" << id << ": " << size.width << " " << size.height << "\nK_0" << id << ": " << cam.left.fx << " 0 "
-          << cam.left.cx << " 0 " << cam.left.fy << " " << cam.left.cy << " 0 0 1\nD_0" << id
-          << ": -0.08 0.03 0 0 0\nR_rect_0" << id << ": 1 0 0 0 1 0 0 0 1\nS_rect_0" << id << ": " << size.width << " "
-          << size.height << "\nP_rect_0" << id << ": " << cam.left.fx << " 0 " << cam.left.cx << " " << tx << " 0 "
-          << cam.left.fy << " " << cam.left.cy << " 0 0 0 1 0\n";
-  }
-  for (const char* id : {"00", "01"}) {
-    const fs::path camera_dir = drive / ("image_" + std::string(id));
-    fs::create_directories(camera_dir / "data");
-    std::ofstream times(camera_dir / "timestamps.txt");
-    int written = 0;
-    for (int i = 0; i < reader->size(); ++i) {
-      if (id == std::string("01") && i == dropped) continue;
-      const double t = reader->timestamps()[i] + (id == std::string("01") ? 0.0004 : 0.0);  // trigger jitter
-      char stamp[64];
-      std::snprintf(stamp, sizeof(stamp), "2011-09-26 13:02:%02d.%09d", 10 + static_cast<int>(t),
-                    static_cast<int>(std::lround((t - std::floor(t)) * 1e9)));
-      times << stamp << "\n";
-      const StereoFrame frame = reader->Read(i);
-      cv::Mat distorted;
-      cv::remap(id == std::string("00") ? frame.left : frame.right, distorted, map_x, map_y, cv::INTER_LINEAR,
-                cv::BORDER_REPLICATE);
-      cv::imwrite((camera_dir / "data" / RawName(written++, ".png")).string(), distorted);
+  fs::remove(copy / "image_01" / "data" / "0000000005.png");
+  const std::unique_ptr<SequenceReader> gappy = OpenSequence(copy.string());
+  const std::unique_ptr<SequenceReader> odometry_layout = OpenSequence(Seq().string());
+  ASSERT_EQ(gappy->size(), kFrames - 1);
+  EXPECT_EQ(gappy->FrameName(5), "0000000006");
+  EXPECT_EQ(cv::norm(gappy->Read(5).right, odometry_layout->Read(6).right, cv::NORM_INF), 0.0);
+  // timestamps.txt keeps its 40 lines: every remaining file keeps the time of its own line.
+  EXPECT_NEAR(gappy->timestamps()[5] - gappy->timestamps()[4],
+              odometry_layout->timestamps()[6] - odometry_layout->timestamps()[4], 1e-6);
+}
+
+TEST_F(SyncDrive, GtDepthGivesBackTheSimulatedDepthAtTheVelodynePixels) {
+  for (int camera : {0, 2}) {
+    const fs::path gt = Dir() / ("gt_depth_" + std::to_string(camera));
+    const testing::CliRun run = testing::RunDvso("gt-depth --quiet --sequence " + Drive().string() + " --out " +
+                                                 gt.string() + " --camera " + std::to_string(camera));
+    ASSERT_EQ(run.exit_code, 0) << run.out;
+    for (int i : {0, 20, 39}) {
+      char raw[32], sim[32];
+      std::snprintf(raw, sizeof(raw), "%010d", i);
+      std::snprintf(sim, sizeof(sim), "%06d.png", i);
+      const int points = CheckGtDepth(gt, raw, Seq() / "depth_0" / sim);
+      // Every in-view point has its own pixel; the ground points around the car (behind it, beside the view) fall
+      // outside the image or behind the camera and are dropped.
+      const std::vector<VelodynePoint> scan =
+          ReadVelodyneScan((Drive() / "velodyne_points" / "data" / (std::string(raw) + ".bin")).string());
+      int behind = 0;
+      for (const VelodynePoint& p : scan) behind += p.x() < 0 ? 1 : 0;
+      EXPECT_GT(behind, 1000) << "the scan should see all around the car";
+      EXPECT_GT(points, 2000) << raw;
+      EXPECT_LT(points, static_cast<int>(scan.size()) - behind);
     }
   }
-  return drive;
+}
+
+TEST_F(SyncDrive, SplitGtAndEvaluationFollowTheSplitOrder) {
+  // Three lines in an order of their own; the right image of frame 20 is evaluated in camera 3.
+  const fs::path split = Dir() / "split.txt";
+  std::ofstream(split) << "# test split\n2011_09_26/2011_09_26_drive_0001_sync 0000000030 l\n"
+                       << "2011_09_26/2011_09_26_drive_0001_sync 0000000020 r\n"
+                       << "2011_09_26/2011_09_26_drive_0001_sync 0000000004 l\n";
+  const fs::path gt = Dir() / "split_gt";
+  testing::CliRun run = testing::RunDvso("gt-depth --quiet --split " + split.string() + " --raw-root " +
+                                         (Seq() / "kitti_raw").string() + " --out " + gt.string());
+  ASSERT_EQ(run.exit_code, 0) << run.out;
+  EXPECT_GT(CheckGtDepth(gt, "000000", Seq() / "depth_0" / "000030.png"), 2000);
+  EXPECT_GT(CheckGtDepth(gt, "000002", Seq() / "depth_0" / "000004.png"), 2000);
+  // The r line is frame 20 in camera 3 (one baseline to the right): checked against the simulator's right
+  // depth below, through its disparity (disp_1) as a prediction.
+  const cv::Mat right = ReadKittiMapPng((gt / "000001.png").string());
+  EXPECT_GT(cv::countNonZero(right), 2000);
+
+  // Predictions = the simulator's disparities of each line's camera, as PNGs and as an .npy stack / width.
+  const fs::path pred = Dir() / "split_pred";
+  fs::create_directories(pred);
+  std::vector<cv::Mat> stack;
+  const std::vector<std::pair<std::string, std::string>> lines = {
+      {"disp_0", "000030.png"}, {"disp_1", "000020.png"}, {"disp_0", "000004.png"}};
+  for (size_t i = 0; i < lines.size(); ++i) {
+    const cv::Mat disparity = ReadKittiMapPng((Seq() / lines[i].first / lines[i].second).string());
+    WriteKittiMapPng((pred / SplitMapName(static_cast<int>(i))).string(), disparity);
+    stack.push_back(disparity / disparity.cols);
+  }
+  WriteNpyStack((Dir() / "split_pred.npy").string(), stack);
+  const std::unique_ptr<SequenceReader> sequence = OpenSequence(Seq().string());
+  const std::string fxb = std::to_string(sequence->camera().left.fx * sequence->camera().baseline);
+  for (const std::string& source : {pred.string(), (Dir() / "split_pred.npy").string()}) {
+    run = testing::RunDvso("eval-depth --json --split " + split.string() + " --pred " + source + " --gt " + gt.string() +
+                               " --fxb " + fxb,
+                           /*merge_stderr=*/false);
+    ASSERT_EQ(run.exit_code, 0) << run.out;
+    const nlohmann::json result = nlohmann::json::parse(run.out);
+    EXPECT_LT(result["abs_rel"].get<double>(), 0.01) << source;
+    // The left lines are exact up to quantisation; in camera 3 a few Velodyne points sampled from the left
+    // view lie behind foreground the right camera sees in front of them (parallax, as on real KITTI).
+    EXPECT_EQ(result["per_image"][0]["a1"].get<double>(), 1.0) << source;
+    EXPECT_EQ(result["per_image"][2]["a1"].get<double>(), 1.0) << source;
+    EXPECT_GT(result["per_image"][1]["a1"].get<double>(), 0.999) << source;
+    EXPECT_EQ(result["crop"].get<std::string>(), "garg") << source;
+  }
+  // A stack of the wrong length is refused, naming it.
+  WriteNpyStack((Dir() / "short.npy").string(), {stack[0]});
+  run = testing::RunDvso("eval-depth --split " + split.string() + " --pred " + (Dir() / "short.npy").string() +
+                         " --gt " + gt.string() + " --fxb " + fxb);
+  EXPECT_NE(run.exit_code, 0);
+  EXPECT_NE(run.out.find("short.npy"), std::string::npos) << run.out;
+}
+
+TEST_F(SyncDrive, OxtsPosesRoundTrip) {
+  const fs::path out = Dir() / "oxts_poses.txt";
+  const testing::CliRun run =
+      testing::RunDvso("oxts-poses --sequence " + Drive().string() + " --out " + out.string() + " --camera 0");
+  ASSERT_EQ(run.exit_code, 0) << run.out;
+  const Trajectory oxts = ReadTrajectory(out.string(), TrajectoryFormat::kKitti);
+  const Trajectory gt = ReadTrajectory((Seq() / "poses.txt").string(), TrajectoryFormat::kKitti);
+  ASSERT_EQ(oxts.size(), gt.size());
+  for (size_t i = 0; i < gt.size(); ++i) {
+    const Eigen::Isometry3d error = gt.poses[i].T_world_camera.inverse() * oxts.poses[i].T_world_camera;
+    EXPECT_LT(error.translation().norm(), 1e-4) << "frame " << i;
+    EXPECT_LT(Eigen::AngleAxisd(error.linear()).angle(), 1e-7) << "frame " << i;
+  }
+}
+
+TEST_F(SyncDrive, EveryOdometryModeAndTheLabelsMatchTheOdometryLayout) {
+  const std::string oracle_raw =
+      "--disparity-left " + RenamedDisparities(Seq(), "disp_0", Dir() / "disp_left_raw").string() +
+      " --disparity-right " + RenamedDisparities(Seq(), "disp_1", Dir() / "disp_right_raw").string();
+  const std::string oracle = "--disparity-left " + (Seq() / "disp_0").string() + " --disparity-right " +
+                             (Seq() / "disp_1").string();
+  for (const std::string mode : {"stereo", "mono", "dvso"}) {
+    const Trajectory a = Odometry(mode, Seq(), Dir() / ("odometry_layout_" + mode), mode == "dvso" ? oracle : "");
+    const Trajectory b = Odometry(mode, Drive(), Dir() / ("raw_" + mode), mode == "dvso" ? oracle_raw : "");
+    ASSERT_FALSE(a.empty() || b.empty()) << mode;
+    ASSERT_EQ(a.size(), b.size()) << mode;
+    EXPECT_LT(FinalGap(a, b), 1e-3) << mode;
+  }
+  const fs::path labels_a = Dir() / "labels_odometry_layout", labels_b = Dir() / "labels_raw";
+  for (const auto& [sequence, out] : {std::pair{Seq(), labels_a}, std::pair{Drive(), labels_b}}) {
+    const testing::CliRun run = testing::RunDvso("labels --quiet --sequence " + sequence.string() + " --out " + out.string());
+    ASSERT_EQ(run.exit_code, 0) << run.out;
+  }
+  int compared = 0;
+  for (const auto& entry : fs::directory_iterator(labels_a)) {
+    if (entry.path().extension() != ".png") continue;
+    const cv::Mat a = cv::imread(entry.path().string(), cv::IMREAD_UNCHANGED);
+    const cv::Mat b = cv::imread((labels_b / entry.path().filename()).string(), cv::IMREAD_UNCHANGED);
+    ASSERT_FALSE(b.empty()) << entry.path().filename();
+    EXPECT_EQ(cv::norm(a, b, cv::NORM_INF), 0.0) << entry.path().filename();
+    ++compared;
+  }
+  EXPECT_GE(compared, kFrames / 2);
+}
+
+TEST_F(SyncDrive, ColourPairRunsTheOdometry) {
+  const Trajectory grey = Odometry("stereo", Drive(), Dir() / "grey_pair");
+  const Trajectory colour = Odometry("stereo", Drive(), Dir() / "colour_pair", "--cameras colour");
+  ASSERT_FALSE(grey.empty() || colour.empty());
+  ASSERT_EQ(grey.size(), colour.size());
+  EXPECT_LT(FinalGap(grey, colour), 0.02 * grey.PathLength());
+  const testing::CliRun wrong = testing::RunDvso("odometry --no-progress --mode stereo --cameras colour --sequence " +
+                                                 Seq().string() + " --out " + (Dir() / "wrong").string());
+  EXPECT_NE(wrong.exit_code, 0);
+  EXPECT_NE(wrong.out.find("raw drive"), std::string::npos) << wrong.out;
 }
 
 TEST(KittiRawSequence, ExtractDriveIsRectifiedOnReadAndPairedByTimestamp) {
-  const std::string dir = testing::FreshSimulatedSequence("kitti_raw_extract", 40);
-  ASSERT_FALSE(dir.empty());
-  const fs::path seq = fs::path(dir) / "seq";
-  const fs::path drive = WriteAsExtractDrive(seq, fs::path(dir), /*dropped=*/5);
+  // The right cameras lose every 9th frame (9, 18, 27, 36).
+  const std::string dir_name = testing::FreshSimulatedSequence(
+      "kitti_raw_extract", kFrames, "--color --raw-layout extract --raw-drop-every 9");
+  ASSERT_FALSE(dir_name.empty());
+  const fs::path seq = fs::path(dir_name) / "seq", drive = seq / kExtractDrive;
   const std::unique_ptr<SequenceReader> odometry_layout = OpenSequence(seq.string());
   const std::unique_ptr<SequenceReader> raw = OpenSequence(drive.string());
-  ASSERT_EQ(raw->size(), odometry_layout->size() - 1);  // the frame the right camera dropped
-  EXPECT_EQ(raw->FrameName(5), "0000000006");
-  // Rectified on read: the interior matches the original rectified images (two interpolations apart);
-  // left frame 6 pairs with the right camera's 6th file, which holds frame 6.
-  for (int i : {0, 5, 38}) {
-    const int original = i < 5 ? i : i + 1;
-    const StereoFrame a = raw->Read(i), b = odometry_layout->Read(original);
+  ASSERT_EQ(raw->size(), kFrames - 4);
+  EXPECT_EQ(raw->FrameName(9), "0000000010");
+  ASSERT_TRUE(raw->has_color());
+  // The raw files are larger than the rectified images (distorted, unrectified).
+  const cv::Mat raw_file = cv::imread((drive / "image_00" / "data" / "0000000020.png").string(), cv::IMREAD_GRAYSCALE);
+  ASSERT_FALSE(raw_file.empty());
+  EXPECT_GT(raw_file.cols, odometry_layout->camera().left.width);
+
+  // Rectified on read: the interior matches the original rectified images (two interpolations apart); the
+  // right image of each frame is the right camera's own file of the same time despite the shifted numbering.
+  SequenceReadOptions colour;
+  colour.load_color = true;
+  const std::vector<std::pair<int, int>> frames = {{0, 0}, {9, 10}, {17, 19}, {35, 39}};  // (reader, simulation)
+  for (const auto& [i, original] : frames) {
+    const StereoFrame a = raw->Read(i, colour), b = odometry_layout->Read(original, colour);
     const cv::Rect interior(20, 10, a.left.cols - 40, a.left.rows - 20);
-    cv::Mat left_diff, right_diff;
-    cv::absdiff(a.left(interior), b.left(interior), left_diff);
-    cv::absdiff(a.right(interior), b.right(interior), right_diff);
-    EXPECT_LT(cv::mean(left_diff)[0], 4.0) << "frame " << i;
-    EXPECT_LT(cv::mean(right_diff)[0], 4.0) << "frame " << i;
+    for (const auto& [x, y] : {std::pair{a.left, b.left}, std::pair{a.right, b.right}, std::pair{a.left_color, b.left_color},
+                               std::pair{a.right_color, b.right_color}}) {
+      ASSERT_EQ(x.size(), y.size());
+      cv::Mat diff;
+      cv::absdiff(x(interior), y(interior), diff);
+      EXPECT_LT(cv::mean(diff)[0], 4.0) << "frame " << i;
+    }
   }
-  // Without rectification the distortion would show: compare the raw file itself.
-  const cv::Mat raw_file = cv::imread((drive / "image_00" / "data" / RawName(20, ".png")).string(), cv::IMREAD_GRAYSCALE);
-  ASSERT_EQ(raw->FrameName(19), "0000000020");
-  cv::Mat raw_diff, rectified_diff;
-  cv::absdiff(raw_file, odometry_layout->Read(20).left, raw_diff);
-  cv::absdiff(raw->Read(19).left, odometry_layout->Read(20).left, rectified_diff);
-  const cv::Rect interior(20, 10, raw_file.cols - 40, raw_file.rows - 20);
-  EXPECT_LT(cv::mean(rectified_diff(interior))[0], 0.5 * cv::mean(raw_diff(interior))[0]);
 
   // Stereo odometry on the extract drive stays close to the one on the rectified sequence.
-  const Trajectory a = StereoOdometry(seq, fs::path(dir) / "out_odometry");
-  const Trajectory b = StereoOdometry(drive, fs::path(dir) / "out_raw");
+  const Trajectory a = Odometry("stereo", seq, fs::path(dir_name) / "out_odometry");
+  const Trajectory b = Odometry("stereo", drive, fs::path(dir_name) / "out_raw");
   ASSERT_FALSE(a.empty() || b.empty());
-  ASSERT_EQ(b.size() + 1, a.size());
-  const double drift = (a.poses.back().T_world_camera.translation() - b.poses.back().T_world_camera.translation()).norm();
-  EXPECT_LT(drift, 0.02 * a.PathLength()) << "drift " << drift << " m over " << a.PathLength() << " m";
+  ASSERT_EQ(b.size() + 4, a.size());
+  EXPECT_LT(FinalGap(a, b), 0.02 * a.PathLength()) << "over " << a.PathLength() << " m";
+
+  // Text Velodyne scans (the extract format) give the same depth GT.
+  const fs::path gt = fs::path(dir_name) / "gt_depth";
+  const testing::CliRun run =
+      testing::RunDvso("gt-depth --quiet --sequence " + drive.string() + " --out " + gt.string());
+  ASSERT_EQ(run.exit_code, 0) << run.out;
+  EXPECT_TRUE(fs::exists(drive / "velodyne_points" / "data" / "0000000011.txt"));
+  EXPECT_GT(CheckGtDepth(gt, "0000000011", seq / "depth_0" / "000011.png"), 2000);
 }
 
 }  // namespace

@@ -78,6 +78,46 @@ TEST(Data, EpochOrderIsAPermutationThatDependsOnEpoch) {
   for (int i = 0; i < 50; ++i) EXPECT_EQ(a[i], i);
 }
 
+// A monodepth split over a simulated KITTI raw drive: lines pick frames by their file
+// number, side 'r' is the mirrored pair (FlipAndSwap), the colour pair 02/03 is read,
+// and a frame the drive does not have is an error naming the split file.
+TEST(Data, SplitFileOverARawDriveReadsTheNamedFramesAndSides) {
+  const std::string dir = TempDir("split");
+  const std::string sim = std::string(DVSO_BINARY) + " simulate --quiet --out " + dir +
+                          "/seq --count 6 --width 128 --height 64 --color --raw-layout sync > /dev/null 2>&1";
+  ASSERT_EQ(std::system(sim.c_str()), 0) << sim;
+  const std::string drive = "2011_09_26/2011_09_26_drive_0001_sync";
+  std::ofstream(dir + "/split.txt") << "# two sides of frame 4, then frame 1\n"
+                                    << drive << " 0000000004 l\n" << drive << " 0000000004 r\n" << drive << " 1 l\n";
+  StackNetConfig config = LoadConfig(std::string(DVSO_TEST_DATA_DIR) + "/../configs/stacknet_tiny.yaml", false);
+  config.data.sequences = {dir + "/seq"};
+  const StereoDataset odometry_layout(config.data, 64, 32);
+  config.data.sequences.clear();
+  config.data.split_file = dir + "/split.txt";
+  config.data.split_root = dir + "/seq/kitti_raw";
+  const StereoDataset split(config.data, 64, 32);
+  ASSERT_EQ(split.size(), 3);
+  const StereoSample reference4 = odometry_layout.Load(4), reference1 = odometry_layout.Load(1);
+  const StereoSample left4 = split.Load(0), right4 = split.Load(1), left1 = split.Load(2);
+  EXPECT_TRUE(torch::equal(left4.left, reference4.left));  // colour camera 02 = the simulator's image_2
+  EXPECT_TRUE(torch::equal(left4.right, reference4.right));
+  EXPECT_TRUE(torch::equal(left1.left, reference1.left));
+  EXPECT_FALSE(torch::equal(left1.left, reference4.left));
+  EXPECT_TRUE(torch::equal(right4.left, reference4.right.flip({2})));
+  EXPECT_TRUE(torch::equal(right4.right, reference4.left.flip({2})));
+  EXPECT_GT(reference4.left.std().item<double>(), 0.01);
+
+  std::ofstream(dir + "/missing.txt") << drive << " 0000000004 l\n" << drive << " 0000000017 l\n";
+  config.data.split_file = dir + "/missing.txt";
+  try {
+    StereoDataset bad(config.data, 64, 32);
+    ADD_FAILURE() << "a frame the drive does not have was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("missing.txt"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("0000000017"), std::string::npos) << e.what();
+  }
+}
+
 class SimulatedTraining : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
