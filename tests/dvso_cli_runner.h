@@ -3,6 +3,7 @@
 #pragma once
 
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <gtest/gtest.h>
 
@@ -32,11 +33,13 @@ inline CliRun RunDvso(const std::string& args, bool merge_stderr = true) {
   return run;
 }
 
-// Makes a fresh folder `name` under the test temp dir and simulates `frames`
+// Makes a fresh folder `name`_PID under the test temp dir and simulates `frames`
 // small frames (320x96) into <folder>/seq with `dvso simulate` (plus
 // `extra_args`). Returns the folder ("" when the simulation failed).
 inline std::string FreshSimulatedSequence(const std::string& name, int frames, const std::string& extra_args = "") {
-  const std::string dir = ::testing::TempDir() + "/" + name;
+  // The process id keeps test processes that CTest runs in parallel (each with its own copy of a
+  // fixture) out of each other's folders.
+  const std::string dir = ::testing::TempDir() + "/" + name + "_" + std::to_string(::getpid());
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   const CliRun sim = RunDvso("simulate --quiet --out " + dir + "/seq --count " + std::to_string(frames) +
