@@ -6,6 +6,7 @@
 
 #include "core/error.h"
 #include "core/kitti_oxts.h"
+#include "core/sequence.h"
 #include "core/trajectory.h"
 #include "pipelines/commands.h"
 
@@ -19,12 +20,36 @@ struct OxtsPosesArgs {
 };
 
 void Run(const OxtsPosesArgs& args) {
-  const std::vector<Eigen::Isometry3d> poses = OxtsCameraPoses(args.drive_dir, args.camera);
+  const std::vector<Eigen::Isometry3d> packets = OxtsCameraPoses(args.drive_dir, args.camera);
+  // One line per frame the odometry keeps: the drive opened as a sequence (the pair of the chosen camera)
+  // skips left frames without a right partner (extract drives drop frames), so the trajectory and this
+  // file match line by line. Frame names are the file numbers, and packet k belongs to file k.
+  // A drive without images (only oxts/ downloaded) gets one line per packet.
   Trajectory trajectory;
-  for (size_t i = 0; i < poses.size(); ++i) trajectory.poses.push_back({static_cast<double>(i), poses[i]});
+  if (!IsKittiRawDrive(args.drive_dir)) {
+    for (size_t k = 0; k < packets.size(); ++k) trajectory.poses.push_back({static_cast<double>(k), packets[k]});
+    WriteKittiTrajectory(args.out_path, trajectory);
+    std::cout << packets.size() << " poses of rectified camera " << args.camera
+              << ", one per OXTS packet (the drive has no image_0X/data to match frames with; path "
+              << trajectory.PathLength() << " m) written to " << args.out_path << "\n";
+    return;
+  }
+  const std::unique_ptr<SequenceReader> sequence =
+      OpenKittiRawSequence(args.drive_dir, args.camera >= 2 ? CameraPair::kColour : CameraPair::kGrey);
+  Eigen::Isometry3d first_inverse = Eigen::Isometry3d::Identity();
+  for (int i = 0; i < sequence->size(); ++i) {
+    const std::string name = sequence->FrameName(i);
+    const bool numbered = !name.empty() && name.size() <= 10 && name.find_first_not_of("0123456789") == std::string::npos;
+    RequireFile(numbered && std::stoull(name) < packets.size(), args.drive_dir,
+                "frame " + name + " has no OXTS packet of its own (" + std::to_string(packets.size()) + " packets)");
+    const Eigen::Isometry3d pose = packets[std::stoull(name)];
+    if (i == 0) first_inverse = pose.inverse();
+    trajectory.poses.push_back({sequence->timestamps()[i], first_inverse * pose});
+  }
   WriteKittiTrajectory(args.out_path, trajectory);
-  std::cout << poses.size() << " poses of rectified camera " << args.camera << " (path " << trajectory.PathLength()
-            << " m) written to " << args.out_path << "\n";
+  std::cout << trajectory.poses.size() << " poses of rectified camera " << args.camera << " (" << packets.size()
+            << " OXTS packets, one per kept stereo frame; path " << trajectory.PathLength() << " m) written to "
+            << args.out_path << "\n";
 }
 
 }  // namespace
@@ -39,7 +64,8 @@ void AddOxtsPosesCommand(CLI::App& app) {
       "t_rel over 100-800 m segments, not for sub-cm checks");
   cmd->add_option("--sequence", args->drive_dir, "drive folder (2011_09_26_drive_NNNN_sync or _extract) with oxts/")
       ->required();
-  cmd->add_option("--out", args->out_path, "KITTI poses file, one line per OXTS packet, relative to the first")
+  cmd->add_option("--out", args->out_path, "KITTI poses file, one line per stereo frame the odometry reads from the drive (frames without a "
+                  "right image skipped, as there), relative to the first")
       ->required();
   cmd->add_option("--camera", args->camera, "rectified camera: 0 (grey left) or 2 (colour left); 1, 3 right")
       ->capture_default_str();

@@ -333,6 +333,20 @@ TEST(KittiRawSequence, ExtractDriveIsRectifiedOnReadAndPairedByTimestamp) {
   ASSERT_EQ(b.size() + 4, a.size());
   EXPECT_LT(FinalGap(a, b), 0.02 * a.PathLength()) << "over " << a.PathLength() << " m";
 
+  // OXTS poses: one line per kept frame (the drive has a packet for every frame), so they match the
+  // trajectory line by line; line 9 is simulation frame 10.
+  const fs::path oxts_path = fs::path(dir_name) / "oxts_poses.txt";
+  const testing::CliRun oxts_run =
+      testing::RunDvso("oxts-poses --sequence " + drive.string() + " --out " + oxts_path.string());
+  ASSERT_EQ(oxts_run.exit_code, 0) << oxts_run.out;
+  const Trajectory oxts = ReadTrajectory(oxts_path.string(), TrajectoryFormat::kKitti);
+  const Trajectory gt_poses = ReadTrajectory((seq / "poses.txt").string(), TrajectoryFormat::kKitti);
+  ASSERT_EQ(oxts.size(), b.size());
+  for (const auto& [line, frame] : frames) {
+    const Eigen::Isometry3d error = gt_poses.poses[frame].T_world_camera.inverse() * oxts.poses[line].T_world_camera;
+    EXPECT_LT(error.translation().norm(), 1e-4) << "line " << line;
+  }
+
   // Text Velodyne scans (the extract format) give the same depth GT.
   const fs::path gt = fs::path(dir_name) / "gt_depth";
   const testing::CliRun run =
