@@ -26,7 +26,7 @@ namespace {
 namespace fs = std::filesystem;
 
 struct PredictArgs {
-  std::string model, images, sequence, out;
+  std::string model, images, sequence, out, cameras = "colour";
   stacknet::PredictorOptions options;
   bool no_color = false;
 };
@@ -46,7 +46,9 @@ void RunPredict(const PredictArgs& args) {
   std::unique_ptr<SequenceReader> sequence;
   std::vector<std::string> files;
   if (!args.sequence.empty()) {
-    sequence = OpenSequence(args.sequence);
+    // The network sees the colour pair of a KITTI raw drive (it was trained on it); other layouts have one pair.
+    const CameraPair pair = IsKittiRawDrive(args.sequence) ? ParseCameraPair(args.cameras) : CameraPair::kGrey;
+    sequence = OpenSequence(args.sequence, "", pair);
   } else {
     RequireFile(fs::is_directory(args.images), args.images, "image folder not found");
     for (const auto& entry : fs::directory_iterator(args.images)) {
@@ -103,7 +105,8 @@ void RunPredict(const PredictArgs& args) {
     if (writing.valid()) writing.get();
     auto t3 = Clock::now();
     // --images keeps each input's name (as .png); --sequence numbers the frames.
-    std::string name = sequence ? FrameFileName(i, ".png") : fs::path(files[i]).stem().string() + ".png";
+    // Named like the frames, so the folders feed `odometry --mode dvso --disparity-left/-right` directly.
+    std::string name = sequence ? sequence->FrameName(i) + ".png" : fs::path(files[i]).stem().string() + ".png";
     writing = std::async(std::launch::async, [&write, pair = std::move(pair), name = std::move(name)] { write(pair, name); });
     wait_read_s += std::chrono::duration<double>(t1 - t0).count();
     forward_s += std::chrono::duration<double>(t2 - t1).count();
@@ -126,7 +129,13 @@ void AddPredictCommand(CLI::App& app) {
   auto* cmd = app.add_subcommand("predict", "Predict left/right disparity maps with an exported model");
   cmd->add_option("--model", args->model, "TorchScript model from `dvso export`")->required()->check(CLI::ExistingFile);
   cmd->add_option("--images", args->images, "Folder of .png/.jpg images; each output keeps its input's name (as .png)");
-  cmd->add_option("--sequence", args->sequence, "Sequence folder (KITTI odometry layout / dvso simulate output)");
+  cmd->add_option("--sequence", args->sequence,
+                  "Sequence folder (KITTI odometry layout / dvso simulate output / KITTI raw drive); outputs are "
+                  "named like its frames");
+  cmd->add_option("--cameras", args->cameras,
+                  "KITTI raw drives: colour (02/03, what the network trained on) or grey (00/01) pair; odometry "
+                  "using these predictions must read the same pair (odometry --cameras)")
+      ->capture_default_str();
   cmd->add_option("--out", args->out, "Output folder")->required();
   cmd->add_flag("--post-process", args->options.post_process, "Godard's flip-and-blend post-processing (left)");
   cmd->add_option("--device", args->options.device, "auto, cpu or cuda");

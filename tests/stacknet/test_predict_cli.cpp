@@ -5,6 +5,7 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <string>
@@ -62,6 +63,34 @@ TEST_F(PredictCli, TwoImagesWithTheSameNameAreAnError) {
   WriteImage("a.png", 64, 32);
   WriteImage("a.jpg", 64, 32);
   EXPECT_NE(Predict("--no-color"), 0);
+}
+
+// On a KITTI raw drive the network sees the colour pair and the maps are named like the drive's frames
+// (file numbers), so they feed `odometry --mode dvso --cameras colour` unchanged; an extract drive's
+// frame without a right image has no map.
+TEST_F(PredictCli, RawDriveMapsAreNamedLikeItsFramesAndFeedTheOdometry) {
+  const std::string seq = (dir_ / "seq").string();
+  const std::string sim = std::string(DVSO_BINARY) + " simulate --quiet --out " + seq +
+                          " --count 12 --width 320 --height 96 --texture-size 128 --color --raw-layout extract "
+                          "--raw-drop-every 5 > /dev/null 2>&1";
+  ASSERT_EQ(std::system(sim.c_str()), 0) << sim;
+  const std::string drive = seq + "/kitti_raw/2011_09_26/2011_09_26_drive_0001_extract";
+  const std::string out = (dir_ / "raw_out").string();
+  const std::string predict = std::string(DVSO_BINARY) + " predict --model " + model_ + " --sequence " + drive +
+                              " --out " + out + " > /dev/null 2>&1";
+  ASSERT_EQ(std::system(predict.c_str()), 0) << predict;
+  EXPECT_TRUE(fs::exists(out + "/left/0000000004.png"));
+  EXPECT_FALSE(fs::exists(out + "/left/0000000005.png")) << "frame 5 has no right image";
+  EXPECT_TRUE(fs::exists(out + "/right/0000000011.png"));
+  EXPECT_FALSE(fs::exists(out + "/left/000000.png")) << "renumbered";
+  const std::string odometry = std::string(DVSO_BINARY) + " odometry --mode dvso --cameras colour --no-progress --sequence " +
+                               drive + " --disparity-left " + out + "/left --disparity-right " + out + "/right --out " +
+                               (dir_ / "odometry").string() + " > /dev/null 2>&1";
+  ASSERT_EQ(std::system(odometry.c_str()), 0) << odometry;
+  int lines = 0;
+  std::string line;
+  for (std::ifstream in(dir_ / "odometry" / "trajectory.txt"); std::getline(in, line);) ++lines;
+  EXPECT_EQ(lines, 10);  // 12 frames, 5 and 10 without a right image
 }
 
 }  // namespace
