@@ -32,11 +32,10 @@ std::vector<SplitEntry> ReadSplitFile(const std::string& path) {
     const bool parsed = static_cast<bool>(fields >> entry.drive >> frame >> side) && !(fields >> extra);
     const std::string where = "line " + std::to_string(line_number) + ": ";
     RequireFile(parsed, path, where + "expected '<drive> <frame> <side>', got '" + line + "'");
-    RequireFile(frame.find_first_not_of("0123456789") == std::string::npos && frame.size() <= 12, path,
-                where + "frame '" + frame + "' is not a non-negative file number");
-    const long long number = frame.empty() ? -1 : std::stoll(frame);
-    RequireFile(number >= 0 && number <= 999999999, path, where + "frame '" + frame + "' out of range");
-    entry.frame = static_cast<int>(number);
+    const std::optional<long long> number = ParseFrameNumber(frame);
+    RequireFile(number.has_value(), path, where + "frame '" + frame + "' is not a non-negative file number");
+    RequireFile(*number <= 999999999, path, where + "frame '" + frame + "' out of range");
+    entry.frame = static_cast<int>(*number);
     RequireFile(side == "l" || side == "r", path, where + "side '" + side + "' is not l or r");
     entry.side = side[0];
     entries.push_back(entry);

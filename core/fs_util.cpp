@@ -47,4 +47,12 @@ std::string FrameFileName(int index, const std::string& extension, int digits) {
   return std::string(buf) + extension;
 }
 
+std::optional<long long> ParseFrameNumber(const std::string& name) {
+  constexpr size_t kMaxDigits = 12;  // fits a long long with room to spare
+  if (name.empty() || name.size() > kMaxDigits || name.find_first_not_of("0123456789") != std::string::npos) {
+    return std::nullopt;
+  }
+  return std::stoll(name);
+}
+
 }  // namespace dvso

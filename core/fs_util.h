@@ -3,6 +3,7 @@
 #pragma once
 
 #include <functional>
+#include <optional>
 #include <string>
 
 namespace dvso {
@@ -19,5 +20,9 @@ std::string JoinPath(const std::string& a, const std::string& b);
 
 // "%06d"-style frame file name: FrameFileName(7, ".png") == "000007.png".
 std::string FrameFileName(int index, const std::string& extension, int digits = 6);
+
+// The number a frame's file name stands for: ParseFrameNumber("0000000069") == 69. Empty for a name
+// that is not 1-12 decimal digits (KITTI raw uses 10, the odometry layout 6), so callers can say why.
+std::optional<long long> ParseFrameNumber(const std::string& name);
 
 }  // namespace dvso

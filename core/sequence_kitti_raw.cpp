@@ -252,9 +252,8 @@ class KittiRawSequence : public SequenceReader {
       // Line k of timestamps.txt belongs to file k (%010d): with files missing (a damaged or partial
       // download) the remaining ones keep their own times.
       for (const std::string& file : camera.files) {
-        const std::string stem = fs::path(file).stem().string();
-        const bool numbered = !stem.empty() && stem.size() <= 10 && stem.find_first_not_of("0123456789") == std::string::npos;
-        const size_t number = numbered ? std::stoul(stem) : times.size();
+        const std::optional<long long> parsed = ParseFrameNumber(fs::path(file).stem().string());
+        const size_t number = parsed ? static_cast<size_t>(*parsed) : times.size();
         RequireFile(number < times.size(), path,
                     std::to_string(times.size()) + " timestamps for " + std::to_string(camera.files.size()) +
                         " images, and " + fs::path(file).filename().string() + " has no line of its own");

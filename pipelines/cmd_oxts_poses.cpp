@@ -3,8 +3,10 @@
 // KITTI poses file for `dvso eval-odometry`.
 #include <iostream>
 #include <memory>
+#include <optional>
 
 #include "core/error.h"
+#include "core/fs_util.h"
 #include "core/kitti_oxts.h"
 #include "core/sequence.h"
 #include "core/trajectory.h"
@@ -39,10 +41,10 @@ void Run(const OxtsPosesArgs& args) {
   Eigen::Isometry3d first_inverse = Eigen::Isometry3d::Identity();
   for (int i = 0; i < sequence->size(); ++i) {
     const std::string name = sequence->FrameName(i);
-    const bool numbered = !name.empty() && name.size() <= 10 && name.find_first_not_of("0123456789") == std::string::npos;
-    RequireFile(numbered && std::stoull(name) < packets.size(), args.drive_dir,
+    const std::optional<long long> number = ParseFrameNumber(name);
+    RequireFile(number && static_cast<size_t>(*number) < packets.size(), args.drive_dir,
                 "frame " + name + " has no OXTS packet of its own (" + std::to_string(packets.size()) + " packets)");
-    const Eigen::Isometry3d pose = packets[std::stoull(name)];
+    const Eigen::Isometry3d pose = packets[static_cast<size_t>(*number)];
     if (i == 0) first_inverse = pose.inverse();
     trajectory.poses.push_back({sequence->timestamps()[i], first_inverse * pose});
   }

@@ -109,10 +109,7 @@ void StereoDataset::AddSplit(const std::string& split_file) {
     if (numbers.empty()) {
       const SequenceReader& reader = *sequences_[seq].reader;
       for (int i = 0; i < reader.size(); ++i) {
-        const std::string name = reader.FrameName(i);
-        if (!name.empty() && name.size() <= 12 && name.find_first_not_of("0123456789") == std::string::npos) {
-          numbers[std::stoll(name)] = i;
-        }
+        if (const std::optional<long long> number = ParseFrameNumber(reader.FrameName(i))) numbers[*number] = i;
       }
     }
     const auto found = numbers.find(entry.frame);

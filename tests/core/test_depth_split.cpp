@@ -5,6 +5,7 @@
 
 #include "core/depth_split.h"
 #include "core/error.h"
+#include "core/fs_util.h"
 #include "tests/temp_dir.h"
 
 namespace dvso {
@@ -13,6 +14,17 @@ namespace {
 std::string WriteFile(const testing::TempDir& dir, const std::string& name, const std::string& text) {
   std::ofstream(dir / name) << text;
   return dir / name;
+}
+
+TEST(ParseFrameNumber, ReadsOnlyNamesOfOneToTwelveDigits) {
+  EXPECT_EQ(ParseFrameNumber("0000000069"), 69);
+  EXPECT_EQ(ParseFrameNumber("000000"), 0);
+  EXPECT_EQ(ParseFrameNumber("999999999999"), 999999999999LL);
+  EXPECT_FALSE(ParseFrameNumber("").has_value());
+  EXPECT_FALSE(ParseFrameNumber("1234567890123").has_value());  // 13 digits
+  EXPECT_FALSE(ParseFrameNumber("-1").has_value());
+  EXPECT_FALSE(ParseFrameNumber("12a").has_value());
+  EXPECT_FALSE(ParseFrameNumber("te08_000001").has_value());
 }
 
 TEST(DepthSplit, ReadsEntriesInOrderSkippingBlankAndCommentLines) {
