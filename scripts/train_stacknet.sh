@@ -16,8 +16,9 @@
 #   scripts/train_stacknet.sh [all|data|train|monitor|export|eval]    (default: all)
 # Environment:
 #   DVSO=build/dvso                      binary (build with scripts/build.sh)
-#   CONFIG=configs/stacknet_cpu_main.yaml  its data paths must point into $DATA
-#   DATA=/tmp/dvso_stacknet_v3           rendered sequences and labels (~6 GB)
+#   WORLDS=v3                            training worlds: v3 = 36 of 60 frames, v4 = 72 of 30 frames
+#   CONFIG=configs/stacknet_cpu_main.yaml  (v4: configs/stacknet_cpu_v4.yaml) data paths must point into $DATA
+#   DATA=/tmp/dvso_stacknet_$WORLDS      rendered sequences and labels (~6 GB)
 #   RUN=$DATA/run_main                   checkpoints, logs, exported models, predictions
 #   DOCS=docs                            where metrics and figures go
 #   SNIPPETS=/work/shared/data/kitti_odometry_snippets  real KITTI frames (no depth GT) for a figure
@@ -30,8 +31,9 @@ set -euo pipefail
 cd "${REPO:-$(dirname "$0")/..}"
 STEP=${1:-all}
 DVSO=${DVSO:-build/dvso}
-CONFIG=${CONFIG:-configs/stacknet_cpu_main.yaml}
-DATA=${DATA:-/tmp/dvso_stacknet_v3}
+WORLDS=${WORLDS:-v3}
+CONFIG=${CONFIG:-configs/stacknet_cpu_$([[ $WORLDS == v4 ]] && echo v4 || echo main).yaml}
+DATA=${DATA:-/tmp/dvso_stacknet_$WORLDS}
 RUN=${RUN:-$DATA/run_main}
 DOCS=${DOCS:-docs}
 NICE=${NICE:-19}
@@ -59,6 +61,27 @@ TRAIN_SEGMENTS=(
   "w229 05 2025 60 229" "w230 05 2475 60 230" "w231 06 173 60 231" "w232 06 520 60 232"
   "w233 06 867 60 233" "w234 07 173 60 234" "w235 07 520 60 235" "w236 07 867 60 236"
 )
+# World set v4 (WORLDS=v4, session 8): the same 2160 training frames spread over twice as many worlds
+# (72 of 30 frames, seeds 401-472, worlds per trajectory ~ its length, evenly spaced along it), since
+# held-out accuracy follows the number of looks seen, not the frames per look (docs/stacknet.md).
+if [[ $WORLDS == v4 ]]; then
+  mapfile -t TRAIN_SEGMENTS < <(python3 - <<'EOF'
+lengths = {"00": 4541, "01": 1101, "02": 4661, "03": 801, "04": 271, "05": 2761, "06": 1101, "07": 1101}
+worlds, frames, total = 72, 30, sum(lengths.values())
+# Largest-remainder allocation of the worlds to trajectories, at least one each.
+quota = {t: worlds * n / total for t, n in lengths.items()}
+count = {t: max(1, int(q)) for t, q in quota.items()}
+for t in sorted(quota, key=lambda t: quota[t] - int(quota[t]), reverse=True)[: worlds - sum(count.values())]:
+    count[t] += 1
+seed = 401
+for t, n in lengths.items():
+    for k in range(count[t]):
+        first = max(0, min(n - frames, int((k + 0.5) * n / count[t]) - frames // 2))
+        print(f"w{seed} {t} {first} {frames} {seed}")
+        seed += 1
+EOF
+  )
+fi
 TEST_SEGMENTS=("te08 08 1000 150 308" "te09 09 300 150 309" "te10 10 300 150 310")
 # Frames of each held-out segment used for the per-epoch curve (every 5th: 90 frames).
 CURVE_STEP=5
