@@ -61,6 +61,23 @@ TEST(Config, UnknownKeysAreErrorsAndYamlRoundTrips) {
   EXPECT_DOUBLE_EQ(paper.stages[1].LearningRateAt(39), 5e-5);
 }
 
+TEST(Config, EveryShippedStackNetConfigLoadsAndChecks) {
+  // A typo or a stage pointing at an undefined dataset in a committed config would only surface
+  // when someone starts an hour-long training run.
+  int loaded = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(std::string(DVSO_TEST_DATA_DIR) + "/../configs")) {
+    const std::string name = entry.path().filename().string();
+    if (name.rfind("stacknet_", 0) != 0 || entry.path().extension() != ".yaml") continue;
+    SCOPED_TRACE(name);
+    // Configs meant for `dvso train --sequence DIR` leave data.sequences to the command line.
+    StackNetConfig config = LoadConfig(entry.path().string(), false);
+    if (config.data.sequences.empty() && config.data.split_file.empty()) config.data.sequences = {"given/on/the/cli"};
+    EXPECT_NO_THROW(config.Check());
+    ++loaded;
+  }
+  EXPECT_GE(loaded, 6);
+}
+
 TEST(Data, SparseLabelsKeepTheirValuesScaledWithTheWidth) {
   cv::Mat sparse = cv::Mat::zeros(4, 8, CV_32F);
   sparse.at<float>(1, 5) = 10.0f;
