@@ -20,7 +20,8 @@
 #   CONFIG=configs/stacknet_cpu_main.yaml  (v4: configs/stacknet_cpu_v4.yaml) data paths must point into $DATA
 #   DATA=/tmp/dvso_stacknet_$WORLDS      rendered sequences and labels (~6 GB)
 #   RUN=$DATA/run_main                   checkpoints, logs, exported models, predictions
-#   DOCS=docs                            where metrics and figures go
+#   DOCS=docs                            where metrics and figures go (default: docs/ for the shipped
+#                                        config, $RUN/docs for any other)
 #   SNIPPETS=/work/shared/data/kitti_odometry_snippets  real KITTI frames (no depth GT) for a figure
 #   NICE=19                              niceness of the heavy steps (the machine is shared)
 #   REPO=(script's parent)               repository root (when running a copy of this script)
@@ -35,7 +36,9 @@ WORLDS=${WORLDS:-v3}
 CONFIG=${CONFIG:-configs/stacknet_cpu_$([[ $WORLDS == v4 ]] && echo v4 || echo main).yaml}
 DATA=${DATA:-/tmp/dvso_stacknet_$WORLDS}
 RUN=${RUN:-$DATA/run_main}
-DOCS=${DOCS:-docs}
+# Figures and metrics go into docs/ only for the shipped model's config; other runs keep theirs in $RUN/docs.
+DOCS=${DOCS:-$([[ $CONFIG == configs/stacknet_cpu_main.yaml ]] && echo docs || echo "$RUN/docs")}
+mkdir -p "$DOCS"
 NICE=${NICE:-19}
 FIGURES=${FIGURES:-$(dirname "$DVSO")/tools/stacknet_figures}
 SNIPPETS=${SNIPPETS:-/work/shared/data/kitti_odometry_snippets}
