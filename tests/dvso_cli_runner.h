@@ -12,6 +12,8 @@
 #include <cstdio>
 #include <string>
 
+#include "tests/temp_dir.h"
+
 namespace dvso::testing {
 
 struct CliRun {
@@ -37,11 +39,9 @@ inline CliRun RunDvso(const std::string& args, bool merge_stderr = true) {
 // small frames (320x96) into <folder>/seq with `dvso simulate` (plus
 // `extra_args`). Returns the folder ("" when the simulation failed).
 inline std::string FreshSimulatedSequence(const std::string& name, int frames, const std::string& extra_args = "") {
-  // The process id keeps test processes that CTest runs in parallel (each with its own copy of a
-  // fixture) out of each other's folders.
-  const std::string dir = ::testing::TempDir() + "/" + name + "_" + std::to_string(::getpid());
-  std::filesystem::remove_all(dir);
-  std::filesystem::create_directories(dir);
+  // Under the process's scratch root (tests/temp_dir.h): CTest's parallel processes, each with its
+  // own copy of a fixture, stay out of each other's folders, and the folder goes when the process ends.
+  const std::string dir = ScratchDir(name);
   const CliRun sim = RunDvso("simulate --quiet --out " + dir + "/seq --count " + std::to_string(frames) +
                              " --width 320 --height 96 --texture-size 128 " + extra_args);
   return sim.exit_code == 0 ? dir : "";

@@ -11,6 +11,7 @@
 
 #include "core/disparity_io.h"
 #include "tests/dvso_cli_runner.h"
+#include "tests/temp_dir.h"
 
 namespace fs = std::filesystem;
 
@@ -20,10 +21,7 @@ using dvso::testing::CliRun;
 using dvso::testing::RunDvso;
 
 std::string TempDir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("dvso_cli_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir.string();
+  return dvso::testing::ScratchDir("cli_" + name);
 }
 
 }  // namespace

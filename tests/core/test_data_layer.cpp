@@ -15,6 +15,7 @@
 #include "core/lie.h"
 #include "core/sequence.h"
 #include "core/trajectory.h"
+#include "tests/temp_dir.h"
 
 namespace fs = std::filesystem;
 using namespace dvso;
@@ -22,10 +23,7 @@ using namespace dvso;
 namespace {
 
 std::string TempDir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("dvso_test_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir.string();
+  return dvso::testing::ScratchDir(name);
 }
 
 void WriteText(const std::string& path, const std::string& text) {

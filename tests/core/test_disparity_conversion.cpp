@@ -11,6 +11,7 @@
 #include "core/disparity_io.h"
 #include "core/disparity_source.h"
 #include "core/error.h"
+#include "tests/temp_dir.h"
 
 namespace dvso {
 namespace {
@@ -131,7 +132,7 @@ TEST(DisparityResize, BilinearNeverMixesInvalidPixels) {
 }
 
 std::string FreshDir(const std::string& name) {
-  const std::string dir = ::testing::TempDir() + "/dvso_disp_source_" + name;
+  const std::string dir = dvso::testing::ScratchPath("disp_source_" + name);
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir;

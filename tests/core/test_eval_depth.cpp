@@ -8,6 +8,7 @@
 
 #include "core/error.h"
 #include "core/eval_depth.h"
+#include "tests/temp_dir.h"
 
 namespace fs = std::filesystem;
 
@@ -165,7 +166,7 @@ void WriteUint16(const fs::path& path, const cv::Mat& values) {
 struct Folders {
   fs::path root, pred, gt;
   explicit Folders(const std::string& name) {
-    root = fs::temp_directory_path() / ("dvso_eval_depth_" + name + "_" + std::to_string(::getpid()));
+    root = fs::path(dvso::testing::ScratchPath("eval_depth_" + name));
     fs::remove_all(root);
     pred = root / "pred";
     gt = root / "gt";

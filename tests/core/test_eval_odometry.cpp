@@ -12,6 +12,7 @@
 #include "core/lie.h"
 #include "core/plot.h"
 #include "core/trajectory.h"
+#include "tests/temp_dir.h"
 
 namespace fs = std::filesystem;
 
@@ -260,7 +261,7 @@ TEST(EvalOdometry, JsonHasRequiredKeys) {
 }
 
 TEST(EvalOdometry, WritesBothPlots) {
-  const fs::path dir = fs::temp_directory_path() / ("dvso_eval_plots_" + std::to_string(::getpid()));
+  const fs::path dir = fs::path(dvso::testing::ScratchPath("eval_plots"));
   fs::remove_all(dir);
   const Trajectory gt = KittiSequence04();
   Trajectory est = gt;

@@ -3,7 +3,6 @@
 // depth * disparity = fx * b, determinism, and the written KITTI layout.
 #include <gtest/gtest.h>
 
-#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -21,6 +20,7 @@
 #include "core/sequence.h"
 #include "core/simulator.h"
 #include "core/trajectory.h"
+#include "tests/temp_dir.h"
 
 namespace dvso {
 namespace {
@@ -286,7 +286,7 @@ TEST(Simulator, GeneratedPathIsSmoothAndStartsAtIdentity) {
 }
 
 TEST(Simulator, WritesKittiLayoutWithGroundTruth) {
-  const fs::path dir = fs::temp_directory_path() / ("dvso_sim_test_" + std::to_string(::getpid()));
+  const fs::path dir = fs::path(dvso::testing::ScratchPath("sim_test"));
   fs::remove_all(dir);
   SimulatorOptions o = SmallOptions(160, 48);
   o.num_frames = 3;
@@ -431,7 +431,7 @@ TEST(Simulator, HeightJitterMovesTheCameraAlongDownWithinItsBound) {
 }
 
 TEST(Simulator, CommandLine) {
-  const fs::path dir = fs::temp_directory_path() / ("dvso_sim_cli_" + std::to_string(::getpid()));
+  const fs::path dir = fs::path(dvso::testing::ScratchPath("sim_cli"));
   fs::remove_all(dir);
   const std::string dvso = DVSO_BINARY;
   const std::string ok = dvso + " simulate --width 128 --height 40 --count 2 --seed 4 --texture-size 128 --quiet --out " +

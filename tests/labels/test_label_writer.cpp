@@ -8,6 +8,7 @@
 #include "core/error.h"
 #include "core/fs_util.h"
 #include "sdso_labels/label_writer.h"
+#include "tests/temp_dir.h"
 
 using namespace dvso;
 using namespace dvso::labels;
@@ -23,9 +24,7 @@ StereoCamera Camera() {
 }
 
 std::string TempDir() {
-  const fs::path dir = fs::temp_directory_path() / ("dvso_labelwriter_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  return dir.string();
+  return dvso::testing::ScratchPath("labelwriter");
 }
 
 vo::PointInfo Point(int host, float u, float v, double idepth, int good) {

@@ -13,6 +13,7 @@
 #include "core/sequence.h"
 #include "sdso_labels/label_runner.h"
 #include "sdso_labels/pair_cache.h"
+#include "tests/temp_dir.h"
 
 namespace fs = std::filesystem;
 using namespace dvso;
@@ -23,8 +24,7 @@ constexpr int kFrames = 40;
 
 const std::string& SimulatedSequenceDir() {
   static const std::string dir = [] {
-    const std::string out = (fs::temp_directory_path() / ("dvso_labels_e2e_" + std::to_string(::getpid()))).string();
-    fs::remove_all(out);
+    const std::string out = dvso::testing::ScratchPath("labels_e2e");
     SimulatorOptions o;
     o.trajectory_path = std::string(DVSO_TEST_DATA_DIR) + "/kitti_poses/00.txt";
     o.num_frames = kFrames;

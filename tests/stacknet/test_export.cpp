@@ -13,6 +13,7 @@
 #include "stacknet/config.h"
 #include "stacknet/export.h"
 #include "stacknet_test_util.h"
+#include "tests/temp_dir.h"
 
 namespace dvso::stacknet {
 namespace {
@@ -29,7 +30,7 @@ TEST(Export, TracedModuleMatchesTheCppModuleAtTwoSizes) {
     for (auto& p : net->residual_net()->parameters()) p.add_(torch::randn_like(p) * 0.005);
   }
   net->eval();
-  const std::string path = (fs::temp_directory_path() / ("dvso_export_" + std::to_string(::getpid()) + ".pt")).string();
+  const std::string path = dvso::testing::ScratchPath("export.pt");
   for (const bool use_residual : {false, true}) {
     torch::jit::Module traced = TraceStackNet(net, use_residual, 32, 64);
     traced.save(path);
@@ -66,7 +67,7 @@ TEST(Export, CheckpointExportUsesTheTrainedNetwork) {
   config.data.sequences = {"unused"};
   config.stages.resize(1);
   StackNet net(config.network);
-  const fs::path dir = fs::temp_directory_path() / ("dvso_export_ckpt_" + std::to_string(::getpid()));
+  const fs::path dir = fs::path(dvso::testing::ScratchPath("export_ckpt"));
   fs::create_directories(dir);
   CheckpointInfo info;
   info.config_yaml = ConfigToYaml(config);
@@ -103,7 +104,7 @@ TEST(Export, CheckpointExportUsesTheTrainedNetwork) {
 }
 
 TEST(Export, PredictorRejectsFilesThatAreNotDvsoModelsWithOneLine) {
-  const fs::path dir = fs::temp_directory_path() / ("dvso_export_bad_" + std::to_string(::getpid()));
+  const fs::path dir = fs::path(dvso::testing::ScratchPath("export_bad"));
   fs::create_directories(dir);
   {
     std::ofstream((dir / "text.pt").string()) << "not a model";

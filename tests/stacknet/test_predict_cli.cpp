@@ -1,7 +1,6 @@
 // `dvso predict --images DIR` keeps the input file names (as .png), through
 // the real binary with an untrained tiny model.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <cstdlib>
 #include <filesystem>
@@ -11,6 +10,7 @@
 #include <string>
 
 #include "core/disparity_io.h"
+#include "tests/temp_dir.h"
 
 namespace dvso {
 namespace {
@@ -19,8 +19,7 @@ namespace fs = std::filesystem;
 class PredictCli : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("dvso_predict_cli_" + std::to_string(::getpid()));
-    fs::remove_all(dir_);
+    dir_ = dvso::testing::ScratchDir("predict_cli");
     fs::create_directories(dir_ / "images");
     model_ = (dir_ / "tiny.pt").string();
     const std::string export_cmd = std::string(DVSO_BINARY) + " export --config " + DVSO_TEST_DATA_DIR +

@@ -13,16 +13,14 @@
 #include "stacknet/dataset.h"
 #include "stacknet/trainer.h"
 #include "stacknet_test_util.h"
+#include "tests/temp_dir.h"
 
 namespace dvso::stacknet {
 namespace {
 namespace fs = std::filesystem;
 
 std::string TempDir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("dvso_stacknet_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir.string();
+  return dvso::testing::ScratchDir("stacknet_" + name);
 }
 
 TEST(Training, TinyNetworkOverfitsOneBatch) {
@@ -76,6 +74,78 @@ TEST(Config, EveryShippedStackNetConfigLoadsAndChecks) {
     ++loaded;
   }
   EXPECT_GE(loaded, 6);
+}
+
+void WriteText(const std::string& path, const std::string& text) { std::ofstream(path) << text; }
+
+TEST(Config, BaseFileIsLaidUnderKeyByKey) {
+  const std::string dir = TempDir("config_base");
+  fs::create_directories(dir + "/sub");
+  WriteText(dir + "/root.yaml",
+            "network: {encoder_depth: 18, width_multiplier: 0.5}\n"
+            "loss: {alpha_s: 3.0}\n"
+            "datasets: {A: {sequences: [a1, a2], label_dir_left: labels}, B: {sequences: [b]}}\n"
+            "stages: [{name: s0, data: A, epochs: 2}, {name: s1, data: B, epochs: 1}]\n");
+  // The base path is relative to the file that names it; the middle file has a base of its own.
+  WriteText(dir + "/sub/middle.yaml", "base: ../root.yaml\nnetwork: {width_multiplier: 0.25}\n");
+  WriteText(dir + "/sub/leaf.yaml",
+            "base: middle.yaml\n"
+            "datasets: {A: {label_dir_left: ''}}\n"
+            "stages: [{name: only, data: B, epochs: 5}]\n");
+  const StackNetConfig leaf = LoadConfig(dir + "/sub/leaf.yaml", false);
+  EXPECT_EQ(leaf.network.encoder_depth, 18);          // from the root
+  EXPECT_DOUBLE_EQ(leaf.network.width_multiplier, 0.25);  // the middle file overrides one key of the map
+  EXPECT_DOUBLE_EQ(leaf.loss.alpha_s, 3.0);
+  ASSERT_EQ(leaf.datasets.size(), 2u);
+  EXPECT_EQ(leaf.datasets[0].first, "A");
+  EXPECT_EQ(leaf.datasets[0].second.sequences, (std::vector<std::string>{"a1", "a2"}));  // kept
+  EXPECT_EQ(leaf.datasets[0].second.label_dir_left, "");                                  // overridden
+  ASSERT_EQ(leaf.stages.size(), 1u);  // a list replaces the base's list whole
+  EXPECT_EQ(leaf.stages[0].name, "only");
+  EXPECT_EQ(leaf.stages[0].epochs, 5);
+
+  // Unknown keys stay errors wherever they are; cycles and missing bases are one-line errors.
+  WriteText(dir + "/typo.yaml", "base: root.yaml\nnetwork: {widht_multiplier: 1}\n");
+  EXPECT_THROW(LoadConfig(dir + "/typo.yaml", false), Error);
+  WriteText(dir + "/cycle_a.yaml", "base: cycle_b.yaml\n");
+  WriteText(dir + "/cycle_b.yaml", "base: cycle_a.yaml\n");
+  EXPECT_THROW(LoadConfig(dir + "/cycle_a.yaml", false), Error);
+  WriteText(dir + "/missing.yaml", "base: nowhere.yaml\n");
+  EXPECT_THROW(LoadConfig(dir + "/missing.yaml", false), Error);
+  // From text there is no file to be relative to.
+  EXPECT_THROW(ParseConfig("base: root.yaml\n", "text", false), Error);
+}
+
+// The ablation and experiment configs state only what they change; this pins that what they
+// change is what their comments say (a stale copy once trained the ablations without GroupNorm).
+TEST(Config, AblationConfigsDifferFromTheShippedOneOnlyWhereTheySay) {
+  const std::string configs = std::string(DVSO_TEST_DATA_DIR) + "/../configs/";
+  const StackNetConfig main = LoadConfig(configs + "stacknet_cpu_main.yaml", false);
+  const auto with_labels_of_main = [&](StackNetConfig c) {
+    c.train.output_dir = main.train.output_dir;
+    c.data = main.data;
+    c.datasets = main.datasets;
+    return c;
+  };
+  const StackNetConfig gt = LoadConfig(configs + "stacknet_cpu_main_gt.yaml", false);
+  EXPECT_EQ(gt.data.label_dir_left, "");
+  EXPECT_EQ(gt.data.gt_disparity_left, "disp_0");
+  EXPECT_DOUBLE_EQ(gt.data.gt_sample_fraction, 0.02);
+  EXPECT_EQ(gt.datasets.at(0).second.sequences, main.datasets.at(0).second.sequences);
+  EXPECT_EQ(ConfigToYaml(with_labels_of_main(gt)), ConfigToYaml(main));
+
+  const StackNetConfig self = LoadConfig(configs + "stacknet_cpu_main_self.yaml", false);
+  EXPECT_EQ(self.data.label_dir_left, "");
+  EXPECT_EQ(self.data.gt_disparity_left, "");
+  EXPECT_EQ(self.datasets.at(0).second.label_dir_left, "");
+  EXPECT_EQ(ConfigToYaml(with_labels_of_main(self)), ConfigToYaml(main));
+
+  StackNetConfig v4 = LoadConfig(configs + "stacknet_cpu_v4.yaml", false);
+  EXPECT_NE(v4.data.sequences, main.data.sequences);
+  ASSERT_EQ(v4.stages.size(), main.stages.size());
+  EXPECT_EQ(v4.stages[0].epochs, main.stages[0].epochs + 1);
+  v4.stages[0] = main.stages[0];
+  EXPECT_EQ(ConfigToYaml(with_labels_of_main(v4)), ConfigToYaml(main));
 }
 
 TEST(Data, SparseLabelsKeepTheirValuesScaledWithTheWidth) {

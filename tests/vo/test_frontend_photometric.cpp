@@ -7,12 +7,13 @@
 #include "core/error.h"
 #include "vo/frame/image_pyramid.h"
 #include "vo/frame/photometric_calibration.h"
+#include "tests/temp_dir.h"
 
 namespace dvso::vo {
 namespace {
 
 TEST(FrontendPhotometric, GammaAndVignetteCorrection) {
-  const std::string dir = ::testing::TempDir() + "/dvso_pcalib";
+  const std::string dir = dvso::testing::ScratchPath("pcalib");
   std::filesystem::create_directories(dir);
   // Inverse response G^-1(i) = i^2 (rescaled to [0, 255] on load).
   {
@@ -44,7 +45,7 @@ TEST(FrontendPhotometric, GammaAndVignetteCorrection) {
 }
 
 TEST(FrontendPhotometric, RejectsBadFiles) {
-  const std::string dir = ::testing::TempDir() + "/dvso_pcalib_bad";
+  const std::string dir = dvso::testing::ScratchPath("pcalib_bad");
   std::filesystem::create_directories(dir);
   std::ofstream(dir + "/short.txt") << "1 2 3";
   EXPECT_THROW(PhotometricCalibration::Load(dir + "/short.txt", ""), Error);

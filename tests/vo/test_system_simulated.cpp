@@ -17,6 +17,7 @@
 #include "core/trajectory.h"
 #include "vo/system/output_writers.h"
 #include "vo/system/system.h"
+#include "tests/temp_dir.h"
 
 namespace dvso::vo {
 namespace {
@@ -112,7 +113,7 @@ TEST(SystemSimulated, MonoTracksWithBoundedSim3Error) {
 }
 
 TEST(SystemSimulated, CliWritesEveryOutput) {
-  const std::string dir = ::testing::TempDir() + "/dvso_odometry_cli";
+  const std::string dir = dvso::testing::ScratchPath("odometry_cli");
   std::filesystem::remove_all(dir);
   const std::string seq_dir = dir + "/seq";
   const std::string out_dir = dir + "/out";
