@@ -2,6 +2,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <filesystem>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -187,15 +188,7 @@ StackNetConfig ParseNode(const YAML::Node& root, const std::string& origin) {
   return config;
 }
 
-}  // namespace
-
-StackNetConfig ParseConfig(const std::string& yaml_text, const std::string& origin, bool check) {
-  YAML::Node root;
-  try {
-    root = YAML::Load(yaml_text);
-  } catch (const YAML::Exception& e) {
-    throw Error(origin, std::string("YAML parse error: ") + e.what());
-  }
+StackNetConfig FromNode(const YAML::Node& root, const std::string& origin, bool check) {
   try {
     StackNetConfig config = ParseNode(root, origin);
     if (check) config.Check();
@@ -206,12 +199,61 @@ StackNetConfig ParseConfig(const std::string& yaml_text, const std::string& orig
   }
 }
 
-StackNetConfig LoadConfig(const std::string& path, bool check) {
+YAML::Node ParseYaml(const std::string& yaml_text, const std::string& origin) {
+  try {
+    return YAML::Load(yaml_text);
+  } catch (const YAML::Exception& e) {
+    throw Error(origin, std::string("YAML parse error: ") + e.what());
+  }
+}
+
+// `over` laid onto `base`: maps merge key by key (recursively), anything else
+// (scalars, lists such as `stages` or `sequences`) replaces the base's value.
+YAML::Node MergeOnto(const YAML::Node& base, const YAML::Node& over) {
+  if (!base.IsMap() || !over.IsMap()) return YAML::Clone(over);
+  YAML::Node merged = YAML::Clone(base);
+  for (const auto& item : over) {
+    const std::string key = item.first.as<std::string>();
+    const YAML::Node base_value = base[key];
+    merged[key] = base_value ? MergeOnto(base_value, item.second) : YAML::Clone(item.second);
+  }
+  return merged;
+}
+
+// A chain of `base:` files longer than this is taken for a cycle.
+constexpr int kMaxBaseChain = 8;
+
+// The YAML of a config file with its `base:` chain resolved (base paths are
+// relative to the file that names them).
+YAML::Node LoadResolvedYaml(const std::string& path, int chain_length) {
+  Require(chain_length < kMaxBaseChain,
+          "config 'base:' chain longer than " + std::to_string(kMaxBaseChain) + " files (a cycle?) at " + path);
   std::ifstream file(path);
   RequireFile(file.good(), path, "cannot open config file");
   std::stringstream text;
   text << file.rdbuf();
-  return ParseConfig(text.str(), path, check);
+  YAML::Node root = ParseYaml(text.str(), path);
+  if (!root.IsMap() || !root["base"]) return root;
+  const YAML::Node base_key = root["base"];
+  RequireFile(base_key.IsScalar() && !base_key.as<std::string>().empty(), path, "'base' must name a config file");
+  const std::filesystem::path base_path =
+      std::filesystem::path(path).parent_path() / base_key.as<std::string>();
+  root.remove("base");
+  return MergeOnto(LoadResolvedYaml(base_path.string(), chain_length + 1), root);
+}
+
+}  // namespace
+
+StackNetConfig ParseConfig(const std::string& yaml_text, const std::string& origin, bool check) {
+  const YAML::Node root = ParseYaml(yaml_text, origin);
+  if (root.IsMap() && root["base"]) {
+    throw Error(origin, "'base:' is resolved only when a config is loaded from a file (LoadConfig)");
+  }
+  return FromNode(root, origin, check);
+}
+
+StackNetConfig LoadConfig(const std::string& path, bool check) {
+  return FromNode(LoadResolvedYaml(path, 0), path, check);
 }
 
 std::string ConfigToYaml(const StackNetConfig& config) {

@@ -1,5 +1,8 @@
 // YAML <-> StackNetConfig. Strict: an unknown key anywhere is an error naming
 // the key and the file, so a typo never silently falls back to a default.
+// A config file may start from another one: `base: other.yaml` (relative to the
+// file) loads that file first and lays this one over it, maps key by key, lists
+// and scalars replaced whole (so an ablation states only what it changes).
 #pragma once
 
 #include <string>
