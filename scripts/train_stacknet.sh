@@ -256,13 +256,15 @@ import json, sys, os
 run, out, config = sys.argv[1:4]
 result = {"config": config, "heldout": "dvso simulate --appearance varied along KITTI 08 (poses 1000-1149, seed 308), "
           "09 (300-449, seed 309), 10 (300-449, seed 310), 640x192; eval-depth 0-80 m, no crop, no median scaling"}
+def summary(path):  # the per-image rows stay in RUN/metrics_*.json (they made this file 650 KB)
+    return {k: v for k, v in json.load(open(path)).items() if k != "per_image"}
 for net in ("simplenet", "stacknet"):
-    result[net] = {"all": json.load(open(f"{run}/metrics_{net}.json"))}
+    result[net] = {"all": summary(f"{run}/metrics_{net}.json")}
     for seq in ("te08", "te09", "te10"):
-        result[net][seq] = json.load(open(f"{run}/metrics_{net}_{seq}.json"))
+        result[net][seq] = summary(f"{run}/metrics_{net}_{seq}.json")
     k15 = f"{run}/metrics_k15_{net}.json"
     if os.path.exists(k15):
-        result[net]["kitti2015_000046_10"] = json.load(open(k15))
+        result[net]["kitti2015_000046_10"] = summary(k15)
 secs = f"{run}/train_seconds.txt"
 if os.path.exists(secs):
     result["train_wall_seconds"] = sum(int(l) for l in open(secs) if l.strip())
