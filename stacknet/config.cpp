@@ -209,10 +209,14 @@ YAML::Node ParseYaml(const std::string& yaml_text, const std::string& origin) {
 
 // `over` laid onto `base`: maps merge key by key (recursively), anything else
 // (scalars, lists such as `stages` or `sequences`) replaces the base's value.
+// An empty section (`train:` with every line commented out) leaves the base's
+// map as it is instead of resetting it to the built-in defaults.
 YAML::Node MergeOnto(const YAML::Node& base, const YAML::Node& over) {
+  if (base.IsMap() && over.IsNull()) return YAML::Clone(base);
   if (!base.IsMap() || !over.IsMap()) return YAML::Clone(over);
   YAML::Node merged = YAML::Clone(base);
   for (const auto& item : over) {
+    Require(item.first.IsScalar(), "config keys must be plain names");
     const std::string key = item.first.as<std::string>();
     const YAML::Node base_value = base[key];
     merged[key] = base_value ? MergeOnto(base_value, item.second) : YAML::Clone(item.second);
@@ -239,7 +243,14 @@ YAML::Node LoadResolvedYaml(const std::string& path, int chain_length) {
   const std::filesystem::path base_path =
       std::filesystem::path(path).parent_path() / base_key.as<std::string>();
   root.remove("base");
-  return MergeOnto(LoadResolvedYaml(base_path.string(), chain_length + 1), root);
+  YAML::Node base_root = LoadResolvedYaml(base_path.string(), chain_length + 1);
+  try {
+    ParseNode(base_root, base_path.string());  // a key error in the base names the base file
+  } catch (const Error& e) {
+    if (!e.path().empty()) throw;
+    throw Error(base_path.string(), e.what());
+  }
+  return MergeOnto(base_root, root);
 }
 
 }  // namespace
