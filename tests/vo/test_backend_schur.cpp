@@ -177,5 +177,59 @@ TEST(BackendSchur, MarginalizeBlockEqualsDenseMarginal) {
   EXPECT_LT((Hm.ldlt().solve(-bm) - x_kept).norm(), 1e-8 * x_kept.norm());
 }
 
+// The prior after roundoff: a PSD matrix plus a tiny negative eigenvalue with a
+// gradient along it has no minimum (2 b.dx + dx'H dx -> -inf); the projection
+// removes exactly that direction, keeps the rest of (H, b), and leaves rows of
+// parameters without prior information exactly zero.
+TEST(BackendSchur, PriorProjectionRemovesNegativeAndNullDirectionsOnly) {
+  std::mt19937 rng(5);
+  std::normal_distribution<double> normal;
+  const int n = 12, touched = 10;  // the last 2 parameters carry no prior information
+  Eigen::MatrixXd Q = Eigen::MatrixXd::Zero(touched, touched);
+  for (int i = 0; i < touched; ++i)
+    for (int j = 0; j < touched; ++j) Q(i, j) = normal(rng);
+  Q = Eigen::HouseholderQR<Eigen::MatrixXd>(Q).householderQ();  // orthonormal columns
+  Eigen::VectorXd values(touched);
+  values << -1e-3, 0.0, 1e-2, 1.0, 3.0, 10.0, 1e2, 1e4, 1e6, 1e8;  // wide like the gauge-carrying prior
+  Eigen::MatrixXd H = Eigen::MatrixXd::Zero(n, n);
+  H.topLeftCorner(touched, touched) = Q * values.asDiagonal() * Q.transpose();
+  Eigen::VectorXd b = Eigen::VectorXd::Zero(n);
+  b.head(touched) = Q * Eigen::VectorXd::LinSpaced(touched, 1.0, 10.0);
+
+  // Unbounded before: along the negative direction the energy falls without limit.
+  const auto energy = [](const Eigen::MatrixXd& H, const Eigen::VectorXd& b, const Eigen::VectorXd& dx) {
+    return 2.0 * b.dot(dx) + dx.dot(H * dx);
+  };
+  Eigen::VectorXd down = Eigen::VectorXd::Zero(n);
+  down.head(touched) = -Q.col(0);
+  EXPECT_LT(energy(H, b, 1e4 * down), -1e4);
+
+  Eigen::MatrixXd Hp = H;
+  Eigen::VectorXd bp = b;
+  EXPECT_EQ(ProjectPriorToPositiveSemidefinite(&Hp, &bp), 2);  // the negative and the zero eigenvalue
+  EXPECT_GE(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(Hp).eigenvalues().minCoeff(), -1e-6);
+  // Eigenvectors of small eigenvalues of a matrix of norm 1e8 are accurate to ~eps * 1e8 / gap = 1e-6.
+  for (int k : {0, 1}) EXPECT_NEAR(bp.head(touched).dot(Q.col(k)), 0.0, 1e-5);
+  for (int k = 2; k < touched; ++k) {  // everything else is kept
+    EXPECT_NEAR(bp.head(touched).dot(Q.col(k)), b.head(touched).dot(Q.col(k)), 1e-5);
+    EXPECT_NEAR(Q.col(k).dot(Hp.topLeftCorner(touched, touched) * Q.col(k)), values(k), 1e-6 * values(k) + 1e-9);
+  }
+  EXPECT_EQ(Hp.bottomRows(2).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_EQ(Hp.rightCols(2).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_EQ(bp.tail(2).cwiseAbs().maxCoeff(), 0.0);
+  // Bounded now: the minimum over the kept directions, -b'H^+b, is finite.
+  const Eigen::VectorXd minimiser = -Hp.completeOrthogonalDecomposition().pseudoInverse() * bp;
+  EXPECT_GT(energy(Hp, bp, minimiser), -1e4);
+  EXPECT_GE(energy(Hp, bp, 1e4 * down), energy(Hp, bp, minimiser) - 1e-6);
+
+  // A prior that already is PSD comes back unchanged.
+  Eigen::MatrixXd Hpsd = Hp;
+  Eigen::VectorXd bpsd = bp;
+  Hpsd.topLeftCorner(touched, touched) += 1e-1 * Eigen::MatrixXd::Identity(touched, touched);
+  const Eigen::MatrixXd H_before = Hpsd;
+  EXPECT_EQ(ProjectPriorToPositiveSemidefinite(&Hpsd, &bpsd), 0);
+  EXPECT_EQ((Hpsd - H_before).norm(), 0.0);
+}
+
 }  // namespace
 }  // namespace dvso::vo

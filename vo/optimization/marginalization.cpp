@@ -1,6 +1,7 @@
 #include "vo/optimization/marginalization.h"
 
 #include <Eigen/Eigenvalues>
+#include <vector>
 
 namespace dvso::vo {
 
@@ -102,6 +103,39 @@ void MarginalizeBlock(int offset, int size, Eigen::MatrixXd* H, Eigen::VectorXd*
   const Eigen::VectorXd b_new = q.head(rest) - H_rm * (H_mm_inv * q.tail(size));
   *H = 0.5 * (H_new + H_new.transpose());
   *b = b_new;
+}
+
+int ProjectPriorToPositiveSemidefinite(Eigen::MatrixXd* H, Eigen::VectorXd* b) {
+  // Only the parameters the prior touches: rows that are exactly zero (a keyframe
+  // without prior information) stay exactly zero, so FixConnectedLinearizationPoints
+  // still tells them apart.
+  std::vector<int> touched;
+  for (int i = 0; i < H->rows(); ++i) {
+    if (H->row(i).cwiseAbs().maxCoeff() > 0.0) touched.push_back(i);
+  }
+  const int n = static_cast<int>(touched.size());
+  if (n == 0) return 0;
+  Eigen::MatrixXd sub(n, n);
+  Eigen::VectorXd sub_b(n);
+  for (int i = 0; i < n; ++i) {
+    sub_b(i) = (*b)(touched[i]);
+    for (int j = 0; j < n; ++j) sub(i, j) = 0.5 * ((*H)(touched[i], touched[j]) + (*H)(touched[j], touched[i]));
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(sub);
+  const Eigen::VectorXd& values = eig.eigenvalues();  // ascending
+  const double cut = kPriorNullEigenvalueFraction * std::max(values(n - 1), 0.0);
+  int removed = 0;
+  while (removed < n && values(removed) <= cut) ++removed;
+  if (removed == 0) return 0;
+  const Eigen::MatrixXd null_space = eig.eigenvectors().leftCols(removed);
+  const Eigen::MatrixXd kept = eig.eigenvectors().rightCols(n - removed);
+  sub = kept * values.tail(n - removed).asDiagonal() * kept.transpose();
+  sub_b -= null_space * (null_space.transpose() * sub_b);
+  for (int i = 0; i < n; ++i) {
+    (*b)(touched[i]) = sub_b(i);
+    for (int j = 0; j < n; ++j) (*H)(touched[i], touched[j]) = sub(i, j);
+  }
+  return removed;
 }
 
 }  // namespace dvso::vo

@@ -54,4 +54,21 @@ void AddToPrior(const Eigen::MatrixXd& H_m, const Eigen::VectorXd& b_m, const Ei
 // removes it from the matrices.
 void MarginalizeBlock(int offset, int size, Eigen::MatrixXd* H, Eigen::VectorXd* b);
 
+// Eigenvalues of a prior Hessian at or below this fraction of its largest one
+// are taken for zero (roundoff of the Schur complements; the same cut as the
+// pseudo-inverse in MarginalizeBlock).
+inline constexpr double kPriorNullEigenvalueFraction = 1e-12;
+
+// Keeps the Gaussian prior E(dx) = 2 b.dx + dx' H dx bounded below: H becomes
+// the nearest positive semi-definite matrix (eigenvalues <= the cut above, the
+// negative ones included, set to 0) and b loses its components along those
+// null directions. In exact arithmetic a prior made of Schur complements of
+// least-squares Hessians already is so, but the subtractions in MarginalizeBlock
+// (the 1e8 gauge prior of the first keyframe minus nearly the same amount)
+// leave small negative eigenvalues; with a gradient along them the energy has
+// no minimum and the optimiser walks the window off by hundreds of metres
+// (4541-frame mono soak, frames 2848-2855; DSO orthogonalises its prior for the
+// same reason). Returns the number of directions removed.
+int ProjectPriorToPositiveSemidefinite(Eigen::MatrixXd* H, Eigen::VectorXd* b);
+
 }  // namespace dvso::vo

@@ -55,6 +55,7 @@ void Window::MarginalizePointsIntoPrior(const std::vector<PointRef>& points) {
   Eigen::VectorXd b;
   linearizer.Reduce(0.0, Eigen::MatrixXd(), Eigen::VectorXd(), &H, &b);
   AddToPrior(H, b, FirstEstimateDifference(keyframes_), &prior_H_, &prior_b_);
+  ProjectPriorToPositiveSemidefinite(&prior_H_, &prior_b_);
 }
 
 std::vector<MarginalizedPoint> Window::MarginalizeInvisiblePoints() {
@@ -148,6 +149,7 @@ std::vector<MarginalizedPoint> Window::MarginalizeKeyframe(int id) {
 
   // 4. Schur complement of the keyframe's parameters out of the prior.
   MarginalizeBlock(kFrameParams * index, kFrameParams, &prior_H_, &prior_b_);
+  ProjectPriorToPositiveSemidefinite(&prior_H_, &prior_b_);
 
   // 5. Drop the keyframe, its points, and all residuals into it; keyframes
   //    that now carry prior information keep their linearisation point.
