@@ -209,10 +209,10 @@ step_train() {
 }
 
 step_export() {
-  local simple_stage
-  simple_stage=$(ls "$RUN"/checkpoint_stage2_*.pt 2> /dev/null | head -1)
-  [[ -n "$simple_stage" ]] || { echo "error: no SimpleNet stage checkpoint in $RUN" >&2; exit 1; }
-  [[ -f "$RUN/simplenet.pt" ]] || run "$DVSO" export --checkpoint "$simple_stage" --model simple --out "$RUN/simplenet.pt"
+  [[ -f "$RUN/checkpoint_final.pt" ]] || { echo "error: no final checkpoint in $RUN (train first)" >&2; exit 1; }
+  # SimpleNet is frozen during the StackNet stages, so the final checkpoint holds it exactly as its
+  # own stages left it, whatever the number of stages of the config.
+  [[ -f "$RUN/simplenet.pt" ]] || run "$DVSO" export --checkpoint "$RUN/checkpoint_final.pt" --model simple --out "$RUN/simplenet.pt"
   [[ -f "$RUN/stacknet.pt" ]] || run "$DVSO" export --checkpoint "$RUN/checkpoint_final.pt" --model stack --out "$RUN/stacknet.pt"
 }
 
