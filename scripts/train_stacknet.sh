@@ -5,7 +5,7 @@
 #      (`dvso simulate --appearance varied`, one world seed per segment) and
 #      held-out sequences along 08, 09, 10 (seeds never trained on);
 #   2. sparse supervision with Stereo DSO labels (`dvso labels`, paper section 4);
-#   3. train the staged config (`dvso train`, configs/stacknet_cpu_main.yaml), with a
+#   3. train the staged config (`dvso train`, configs/stacknet_cpu_v4_long.yaml), with a
 #      held-out abs rel after every epoch (learning curve);
 #   4. export SimpleNet (after its stages) and StackNet (final);
 #   5. evaluate both on the held-out frames (`dvso eval-depth`, 0-80 m) and write
@@ -16,12 +16,13 @@
 #   scripts/train_stacknet.sh [all|data|train|monitor|export|eval]    (default: all)
 # Environment:
 #   DVSO=build/dvso                      binary (build with scripts/build.sh)
-#   WORLDS=v3                            training worlds: v3 = 36 of 60 frames, v4 = 72 of 30 frames
-#   CONFIG=configs/stacknet_cpu_main.yaml  (v4: configs/stacknet_cpu_v4.yaml) data paths must point into $DATA
+#   WORLDS=v4                            training worlds: v4 = 72 of 30 frames, v3 = 36 of 60 frames
+#   CONFIG=configs/stacknet_cpu_v4_long.yaml  (the shipped model's; v3: configs/stacknet_cpu_main.yaml)
+#                                        data paths must point into $DATA
 #   DATA=/tmp/dvso_stacknet_$WORLDS      rendered sequences and labels (~6 GB)
 #   RUN=$DATA/run_main                   checkpoints, logs, exported models, predictions
 #   DOCS=docs                            where metrics and figures go (default: docs/ for the shipped
-#                                        config, $RUN/docs for any other)
+#                                        model's config, $RUN/docs for any other)
 #   SNIPPETS=/work/shared/data/kitti_odometry_snippets  real KITTI frames (no depth GT) for a figure
 #   NICE=19                              niceness of the heavy steps (the machine is shared)
 #   REPO=(script's parent)               repository root (when running a copy of this script)
@@ -32,12 +33,13 @@ set -euo pipefail
 cd "${REPO:-$(dirname "$0")/..}"
 STEP=${1:-all}
 DVSO=${DVSO:-build/dvso}
-WORLDS=${WORLDS:-v3}
-CONFIG=${CONFIG:-configs/stacknet_cpu_$([[ $WORLDS == v4 ]] && echo v4 || echo main).yaml}
+WORLDS=${WORLDS:-v4}
+SHIPPED_CONFIG=configs/stacknet_cpu_v4_long.yaml  # trained models/stacknet_cpu_main.pt (session 9)
+CONFIG=${CONFIG:-$([[ $WORLDS == v4 ]] && echo "$SHIPPED_CONFIG" || echo configs/stacknet_cpu_main.yaml)}
 DATA=${DATA:-/tmp/dvso_stacknet_$WORLDS}
 RUN=${RUN:-$DATA/run_main}
 # Figures and metrics go into docs/ only for the shipped model's config; other runs keep theirs in $RUN/docs.
-DOCS=${DOCS:-$([[ $CONFIG == configs/stacknet_cpu_main.yaml ]] && echo docs || echo "$RUN/docs")}
+DOCS=${DOCS:-$([[ $CONFIG == "$SHIPPED_CONFIG" ]] && echo docs || echo "$RUN/docs")}
 NICE=${NICE:-19}
 FIGURES=${FIGURES:-$(dirname "$DVSO")/tools/stacknet_figures}
 SNIPPETS=${SNIPPETS:-/work/shared/data/kitti_odometry_snippets}

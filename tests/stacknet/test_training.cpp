@@ -178,6 +178,20 @@ TEST(Config, AblationConfigsDifferFromTheShippedOneOnlyWhereTheySay) {
   expected_v4.stages[0].epochs = main.stages[0].epochs + 1;
   expected_v4.stages[0].lr_halving_start = main.stages[0].lr_halving_start + 1;
   EXPECT_EQ(ConfigToYaml(v4), ConfigToYaml(expected_v4));
+
+  // v4_long (the shipped model's): v4 plus a second semi-supervised SimpleNet stage, StackNet at 5e-5.
+  const StackNetConfig v4_long = LoadConfig(configs + "stacknet_cpu_v4_long.yaml", false);
+  StackNetConfig expected_long = v4;
+  expected_long.train.output_dir = "runs/stacknet_cpu_v4_long";
+  StageOptions more = v4.stages[0];
+  more.name = "simple_Ko_semi_more";
+  more.epochs = 7;
+  more.learning_rate = 1e-4;
+  more.lr_halving_start = 4;
+  expected_long.stages.insert(expected_long.stages.begin() + 1, more);
+  ASSERT_EQ(expected_long.stages[4].name, "stack_Ko_semi");
+  expected_long.stages[4].learning_rate = 5e-5;
+  EXPECT_EQ(ConfigToYaml(v4_long), ConfigToYaml(expected_long));
 }
 
 TEST(Data, SparseLabelsKeepTheirValuesScaledWithTheWidth) {
