@@ -96,7 +96,7 @@ void MarginalizeBlock(int offset, int size, Eigen::MatrixXd* H, Eigen::VectorXd*
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(H_mm);
   const double max_ev = std::max(eig.eigenvalues().cwiseAbs().maxCoeff(), 1e-300);
   Eigen::VectorXd inv_ev = eig.eigenvalues();
-  for (int i = 0; i < size; ++i) inv_ev(i) = inv_ev(i) > 1e-12 * max_ev ? 1.0 / inv_ev(i) : 0.0;
+  for (int i = 0; i < size; ++i) inv_ev(i) = inv_ev(i) > kPriorNullEigenvalueFraction * max_ev ? 1.0 / inv_ev(i) : 0.0;
   const Eigen::MatrixXd H_mm_inv = eig.eigenvectors() * inv_ev.asDiagonal() * eig.eigenvectors().transpose();
   const Eigen::MatrixXd H_rm = P.topRightCorner(rest, size);
   Eigen::MatrixXd H_new = P.topLeftCorner(rest, rest) - H_rm * H_mm_inv * H_rm.transpose();

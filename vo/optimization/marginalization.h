@@ -54,9 +54,9 @@ void AddToPrior(const Eigen::MatrixXd& H_m, const Eigen::VectorXd& b_m, const Ei
 // removes it from the matrices.
 void MarginalizeBlock(int offset, int size, Eigen::MatrixXd* H, Eigen::VectorXd* b);
 
-// Eigenvalues of a prior Hessian at or below this fraction of its largest one
-// are taken for zero (roundoff of the Schur complements; the same cut as the
-// pseudo-inverse in MarginalizeBlock).
+// Eigenvalues of a prior Hessian (or of the block MarginalizeBlock inverts) at
+// or below this fraction of the largest one are taken for zero (roundoff of the
+// Schur complements).
 inline constexpr double kPriorNullEigenvalueFraction = 1e-12;
 
 // Keeps the Gaussian prior E(dx) = 2 b.dx + dx' H dx bounded below: H becomes
