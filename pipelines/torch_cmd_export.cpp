@@ -14,7 +14,7 @@ namespace dvso::cli {
 
 void AddExportCommand(CLI::App& app) {
   struct Args {
-    std::string checkpoint, config, out, stamp, tuned_on;
+    std::string checkpoint, config, out, stamp, tuned_on, config_name;
     double tuned_baseline = -1;
     bool random_init = false;
     stacknet::ExportOptions options;
@@ -36,6 +36,8 @@ void AddExportCommand(CLI::App& app) {
   cmd->add_option("--tuned-baseline", args->tuned_baseline,
                   "With --stamp: the tuned virtual baseline (paper 'tb', training camera, metres; 0 = none)");
   cmd->add_option("--tuned-on", args->tuned_on, "With --stamp and --tuned-baseline: the sequence it was tuned on");
+  cmd->add_option("--config-name", args->config_name,
+                  "With --stamp: the name of the training config (models exported before it was recorded)");
   cmd->add_option("--model", args->options.model,
                   "auto (as trained), simple (SimpleNet only) or stack (SimpleNet + ResidualNet)");
   cmd->callback([args] {
@@ -45,6 +47,7 @@ void AddExportCommand(CLI::App& app) {
       if (args->options.training_fx_over_width > 0) metadata.fx_over_width = args->options.training_fx_over_width;
       Require(metadata.has_camera(), "--stamp: the model has no training camera: give --training-baseline and "
                                      "--training-fx-over-width");
+      if (!args->config_name.empty()) metadata.config_name = args->config_name;
       if (args->tuned_baseline >= 0) {
         metadata.tuned_baseline = args->tuned_baseline;
         metadata.tuned_on = args->tuned_on;

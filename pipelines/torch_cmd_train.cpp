@@ -39,6 +39,7 @@ void RunTrain(const TrainArgs& args) {
   }
   std::cout << "# dvso train: config " << args.config << "\n" << stacknet::ConfigToYaml(config) << std::flush;
   stacknet::Trainer trainer(config, [](const stacknet::TrainingPosition&) { return g_stop_requested.load(); });
+  trainer.set_config_name(std::filesystem::path(args.config).stem().string());
   std::string resume = args.resume_from;
   if (args.resume && resume.empty()) {
     resume = trainer.LastCheckpointPath();

@@ -22,6 +22,7 @@ void SaveCheckpoint(const std::string& path, StackNet& model, torch::optim::Adam
   }
   archive.write("config_yaml", c10::IValue(info.config_yaml));
   archive.write("trained_model", c10::IValue(info.trained_model));
+  archive.write("config_name", c10::IValue(info.config_name));
   archive.write("stage", c10::IValue(static_cast<int64_t>(info.position.stage)));
   archive.write("epoch", c10::IValue(static_cast<int64_t>(info.position.epoch)));
   archive.write("batch", c10::IValue(static_cast<int64_t>(info.position.batch)));
@@ -64,6 +65,8 @@ CheckpointInfo ReadCheckpointInfo(const std::string& path) {
   } catch (const c10::Error& e) {
     throw Error(path, std::string("not a dvso StackNet checkpoint: ") + e.what_without_backtrace());
   }
+  // Optional: checkpoints written before the config name was recorded lack it.
+  if (archive.try_read("config_name", value)) info.config_name = value.toStringRef();
   return info;
 }
 

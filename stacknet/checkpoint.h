@@ -23,6 +23,7 @@ struct CheckpointInfo {
   std::string config_yaml;            // ConfigToYaml() of the run
   TrainingPosition position;
   std::string trained_model = "simple";  // "simple" or "stack": which network export should use
+  std::string config_name;              // the config file's name without .yaml; "" in checkpoints before session 10
 };
 
 void SaveCheckpoint(const std::string& path, StackNet& model, torch::optim::Adam* optimizer,

@@ -141,7 +141,8 @@ std::string ExportCheckpoint(const std::string& checkpoint_path, const std::stri
   const StackNetConfig config = ParseConfig(info.config_yaml, checkpoint_path + " (embedded config)");
   const bool use_residual = options.model == "stack" || (options.model == "auto" && info.trained_model == "stack");
   ModelMetadata metadata;
-  metadata.config_name = config.train.output_dir;
+  // Checkpoints from before the config name was recorded only know where they were trained.
+  metadata.config_name = info.config_name.empty() ? config.train.output_dir : info.config_name;
   metadata.baseline = options.training_baseline;
   metadata.fx_over_width = options.training_fx_over_width;
   if (!metadata.has_camera()) {

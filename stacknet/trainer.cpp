@@ -127,6 +127,7 @@ TrainResult Trainer::Run(const std::string& resume_checkpoint) {
   TrainResult result;
   CheckpointInfo info;
   info.config_yaml = config_yaml_;
+  info.config_name = config_name_;
   bool resume = !resume_checkpoint.empty();
   if (resume) {
     const CheckpointInfo saved = ReadCheckpointInfo(resume_checkpoint);

@@ -49,12 +49,17 @@ class Trainer {
   TrainResult Run(const std::string& resume_checkpoint = "");
   StackNet& model() { return model_; }
 
+  // Recorded in every checkpoint and from there in the exported model's metadata
+  // (`dvso train` passes the config file's name without .yaml).
+  void set_config_name(std::string name) { config_name_ = std::move(name); }
+
   std::string LastCheckpointPath() const;
   std::string StageCheckpointPath(int stage) const;
 
  private:
   StackNetConfig config_;
   std::string config_yaml_;
+  std::string config_name_;
   StopPredicate should_stop_;
   torch::Device device_;
   StackNet model_;

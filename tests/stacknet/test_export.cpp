@@ -72,7 +72,9 @@ TEST(Export, CheckpointExportUsesTheTrainedNetwork) {
   CheckpointInfo info;
   info.config_yaml = ConfigToYaml(config);
   info.trained_model = "simple";
+  info.config_name = "stacknet_tiny";
   SaveCheckpoint((dir / "c.pt").string(), net, nullptr, info);
+  EXPECT_EQ(ReadCheckpointInfo((dir / "c.pt").string()).config_name, "stacknet_tiny");
   // The config's sequences are gone: the training camera must be given.
   EXPECT_THROW(ExportCheckpoint((dir / "c.pt").string(), (dir / "m.pt").string()), Error);
   ExportOptions options;
@@ -93,6 +95,7 @@ TEST(Export, CheckpointExportUsesTheTrainedNetwork) {
   EXPECT_DOUBLE_EQ(metadata.fx_over_width, 0.58);
   EXPECT_EQ(metadata.input_width, config.network.input_width);
   EXPECT_EQ(metadata.model_kind, "simple");
+  EXPECT_EQ(metadata.config_name, "stacknet_tiny");  // the config's name, not where it was trained
   const TorchDisparityPredictor predictor((dir / "m.pt").string());
   EXPECT_DOUBLE_EQ(predictor.metadata().baseline, 0.54);
   // Stamping metadata onto a file keeps the network.
@@ -101,6 +104,20 @@ TEST(Export, CheckpointExportUsesTheTrainedNetwork) {
   WriteModelWithMetadata((dir / "m.pt").string(), (dir / "s.pt").string(), stamped);
   EXPECT_DOUBLE_EQ(ReadModelMetadata((dir / "s.pt").string()).baseline, 0.3);
   fs::remove_all(dir);
+}
+
+TEST(Export, ShippedModelNamesTheConfigItWasTrainedWith) {
+  // Issue 10: the metadata carries the training config's name; for the shipped model that config
+  // is in configs/ and describes the network in the file.
+  const std::string root = std::string(DVSO_TEST_DATA_DIR) + "/..";
+  const ModelMetadata metadata = ReadModelMetadata(root + "/models/stacknet_cpu_main.pt");
+  ASSERT_FALSE(metadata.config_name.empty());
+  const std::string config_path = root + "/configs/" + metadata.config_name + ".yaml";
+  ASSERT_TRUE(fs::exists(config_path)) << config_path;
+  const StackNetConfig config = LoadConfig(config_path, /*check=*/false);
+  EXPECT_EQ(config.network.input_width, metadata.input_width);
+  EXPECT_EQ(config.network.input_height, metadata.input_height);
+  EXPECT_EQ(metadata.model_kind, "stack");
 }
 
 TEST(Export, PredictorRejectsFilesThatAreNotDvsoModelsWithOneLine) {

@@ -291,6 +291,7 @@ TEST_F(SimulatedTraining, DatasetReadsPairsAndSparseGtLabels) {
 TEST_F(SimulatedTraining, FewCpuStepsThroughAllStagesWriteCheckpointsAndLogs) {
   const std::string out = TempDir("train");
   Trainer trainer(TinyConfig(out));
+  trainer.set_config_name("stacknet_tiny");
   const TrainResult result = trainer.Run();
   EXPECT_TRUE(result.finished);
   EXPECT_EQ(result.position.global_step, 4);  // 2 stages x 2 steps
@@ -305,6 +306,9 @@ TEST_F(SimulatedTraining, FewCpuStepsThroughAllStagesWriteCheckpointsAndLogs) {
   EXPECT_EQ(lines, 5);  // header + 4 steps
   EXPECT_EQ(ReadCheckpointInfo(out + "/checkpoint_final.pt").trained_model, "stack");
   EXPECT_EQ(ReadCheckpointInfo(out + "/checkpoint_stage0_simple_semi.pt").trained_model, "simple");
+  // Every checkpoint names its config, so `dvso export` can write it into the model's metadata.
+  EXPECT_EQ(ReadCheckpointInfo(out + "/checkpoint_stage0_simple_semi.pt").config_name, "stacknet_tiny");
+  EXPECT_EQ(ReadCheckpointInfo(out + "/checkpoint_final.pt").config_name, "stacknet_tiny");
 }
 
 TEST_F(SimulatedTraining, ResumeAfterAnInterruptionContinuesExactly) {
