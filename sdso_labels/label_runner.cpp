@@ -42,6 +42,7 @@ LabelRunOptions LoadLabelRunOptions(const std::string& path) {
   labels.Read("future_keyframes", &options.labels.future_keyframes);
   labels.Read("past_keyframes", &options.labels.past_keyframes);
   labels.Read("right_labels", &options.labels.right_labels);
+  labels.Read("keyframe_candidates", &options.labels.keyframe_candidates);
   YamlSection& check = labels.Child("stereo_check");
   check.Read("enabled", &options.labels.stereo_check.enabled);
   check.Read("window_radius", &options.labels.stereo_check.window_radius);
@@ -86,6 +87,7 @@ std::string LabelRunOptionsToYaml(const LabelRunOptions& options) {
       << "  future_keyframes: " << l.future_keyframes << "\n"
       << "  past_keyframes: " << l.past_keyframes << "\n"
       << "  right_labels: " << (l.right_labels ? "true" : "false") << "\n"
+      << "  keyframe_candidates: " << (l.keyframe_candidates ? "true" : "false") << "\n"
       << "  stereo_check:\n"
       << "    enabled: " << (l.stereo_check.enabled ? "true" : "false") << "\n"
       << "    window_radius: " << l.stereo_check.window_radius << "\n"

@@ -87,6 +87,14 @@ void LabelWriter::OnWindowOptimized(const vo::WindowEvent& event) {
   }
 }
 
+void LabelWriter::OnKeyframeCandidates(int keyframe_frame_index, const std::vector<vo::PointInfo>& candidates) {
+  if (!options_.keyframe_candidates) return;
+  std::vector<vo::PointInfo>& kept = keyframe_candidates_[keyframe_frame_index];
+  for (const vo::PointInfo& p : candidates) {
+    if (p.idepth > 0 && 1.0 / p.idepth <= options_.max_depth) kept.push_back(p);
+  }
+}
+
 void LabelWriter::OnReset(int /*frame_index*/) {
   // Keyframes of the next map live in another world frame: never mix them in.
   for (PendingFrame& frame : pending_) frame.future_hosts_wanted = 0;
@@ -202,6 +210,16 @@ void LabelWriter::Write(const PendingFrame& frame) {
       if (it == hosts_.end() || !it->second.final) continue;
       job.points.insert(job.points.end(), it->second.world.begin(), it->second.world.end());
     }
+  }
+  const auto candidates = keyframe_candidates_.find(frame.frame_index);
+  if (candidates != keyframe_candidates_.end()) {
+    // Placed with the frame's own pose, so they land exactly on their pixels whatever that pose is.
+    if (job.has_pose) {
+      for (const vo::PointInfo& p : candidates->second) {
+        job.points.push_back({job.T_world_frame * (camera_.left.Unproject(p.u, p.v) / p.idepth)});
+      }
+    }
+    keyframe_candidates_.erase(candidates);
   }
   for (int host : frame.hosts) RemoveUser(host);
   producer_.Submit(std::move(job));

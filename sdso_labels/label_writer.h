@@ -46,6 +46,12 @@ struct LabelOptions {
   int future_keyframes = 12;
   // Keyframes marginalised before a frame was tracked whose points also label it.
   int past_keyframes = 6;
+  // Also label each keyframe with its own candidates whose static stereo match converged
+  // (vo::OdometryObserver::OnKeyframeCandidates): the points DSO never activates because
+  // they leave the view before the next keyframe, i.e. near objects at the side. They
+  // label only their keyframe (at their own pixels, so the pose does not matter) and go
+  // through the same occlusion, edge and stereo tests as every label.
+  bool keyframe_candidates = false;
   bool overwrite = false;            // rewrite label files that already exist (else resume: keep them)
   // Also write right-image labels (out_dir/right/; paper eq. of L_s uses both images).
   bool right_labels = false;
@@ -75,6 +81,7 @@ class LabelWriter : public vo::OdometryObserver {
   void OnWindowOptimized(const vo::WindowEvent& event) override;
   void OnPointsMarginalized(const std::vector<vo::PointInfo>& points) override;
   void OnKeyframeMarginalized(const vo::KeyframeInfo& keyframe) override;
+  void OnKeyframeCandidates(int keyframe_frame_index, const std::vector<vo::PointInfo>& candidates) override;
   void OnReset(int frame_index) override;
   void OnFinished() override;
 
@@ -116,6 +123,9 @@ class LabelWriter : public vo::OdometryObserver {
   std::deque<int> recent_past_;         // last past_keyframes marginalised keyframes (same map)
   std::deque<PendingFrame> pending_;    // in input order
   std::map<int, Host> hosts_;           // by keyframe frame index; erased when users drop to 0
+  // With options.keyframe_candidates: stereo-matched candidates of keyframes whose own
+  // frame is not written yet (host pixel and inverse depth), by keyframe frame index.
+  std::map<int, std::vector<vo::PointInfo>> keyframe_candidates_;
   LabelProducer producer_;               // renders, verifies and writes the maps
 };
 

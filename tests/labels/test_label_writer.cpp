@@ -112,6 +112,36 @@ TEST(LabelWriter, WritesWhenKeyframesAreFinalWithFinalPoses) {
   EXPECT_EQ(writer.frames_pending(), 0);
 }
 
+TEST(LabelWriter, KeyframeCandidatesLabelOnlyTheirOwnKeyframe) {
+  for (const bool enabled : {false, true}) {
+    const std::string out = TempDir() + (enabled ? "_candidates_on" : "_candidates_off");
+    std::map<int, cv::Mat> seen;
+    LabelOptions options;
+    options.future_keyframes = 0;
+    options.keyframe_candidates = enabled;
+    LabelWriter writer(Camera(), options, out, [&](int i, const cv::Mat& m) { seen[i] = m.clone(); });
+    writer.OnWindowOptimized(Window(0, {{0, Eigen::Isometry3d::Identity()}}));
+    writer.OnFrameTracked(Tracked(0, 0));
+    // Keyframe 0's stereo-matched candidates: one 2 m away (never activated: it would leave the
+    // view), one 100 m away (beyond max_depth: not a label).
+    writer.OnKeyframeCandidates(0, {Point(0, 5, 5, 0.5, 0), Point(0, 35, 15, 0.01, 0)});
+    writer.OnFrameTracked(Tracked(1, 0, Forward(1.0)));
+    // The keyframe's final pose differs from the tracked one: the candidate still lands on its pixel.
+    Marginalize(&writer, 0, Forward(-0.5), {Point(0, 20, 10, 0.1, 3)});
+    writer.OnFinished();
+    ASSERT_TRUE(seen.count(0) && seen.count(1));
+    EXPECT_FLOAT_EQ(seen[0].at<float>(10, 20), 100 * 0.5 * 0.1f);  // the active point, as always
+    if (enabled) {
+      EXPECT_NEAR(seen[0].at<float>(5, 5), 100 * 0.5 * 0.5, 1e-4);  // disparity fxB * idepth
+      EXPECT_EQ(cv::countNonZero(seen[0]), 2);
+    } else {
+      EXPECT_EQ(cv::countNonZero(seen[0]), 1);
+    }
+    // Frame 1 (not a keyframe) gets only the active point: a candidate labels its keyframe alone.
+    EXPECT_EQ(cv::countNonZero(seen[1]), 1);
+  }
+}
+
 TEST(LabelWriter, ResumeKeepsExistingFiles) {
   const std::string out = TempDir() + "_resume";
   fs::create_directories(out);

@@ -78,6 +78,12 @@ class OdometryObserver {
   virtual void OnWindowOptimized(const WindowEvent& /*event*/) {}
   virtual void OnPointsMarginalized(const std::vector<PointInfo>& /*points*/) {}
   virtual void OnKeyframeMarginalized(const KeyframeInfo& /*keyframe*/) {}
+  // Stereo mode: the candidates of a new keyframe whose static stereo match is
+  // good enough for activation (ImmaturePoint::ReadyForActivation), with host
+  // pixel and inverse depth from that match. DSO activates a candidate only at
+  // the next keyframe and only if it projects into it, so points that leave
+  // the view before (near objects at the side) never become active points.
+  virtual void OnKeyframeCandidates(int /*keyframe_frame_index*/, const std::vector<PointInfo>& /*candidates*/) {}
   // Tracking was lost at frame_index; the window is discarded (its keyframes
   // were reported through OnKeyframeMarginalized before).
   virtual void OnReset(int /*frame_index*/) {}

@@ -125,6 +125,19 @@ void System::AddCandidates(int keyframe_id, const ImagePyramid& left, const Imag
     }
     c.points.push_back(p);
   }
+  if (right != nullptr && !observers_.empty()) {
+    std::vector<PointInfo> matched;
+    for (const ImmaturePoint& p : c.points) {
+      if (p.last_status != TraceStatus::kGood || !p.ReadyForActivation(options_.immature)) continue;
+      PointInfo info;
+      info.host_frame_index = keyframe_id;
+      info.u = p.u;
+      info.v = p.v;
+      info.idepth = p.IdepthEstimate();
+      matched.push_back(info);
+    }
+    for (OdometryObserver* o : observers_) o->OnKeyframeCandidates(keyframe_id, matched);
+  }
   candidates_.push_back(std::move(c));
 }
 
