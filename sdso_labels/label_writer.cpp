@@ -91,7 +91,7 @@ void LabelWriter::OnKeyframeCandidates(int keyframe_frame_index, const std::vect
   if (!options_.keyframe_candidates) return;
   std::vector<vo::PointInfo>& kept = keyframe_candidates_[keyframe_frame_index];
   for (const vo::PointInfo& p : candidates) {
-    if (p.idepth > 0 && 1.0 / p.idepth <= options_.max_depth) kept.push_back(p);
+    if (InDepthRange(p)) kept.push_back(p);
   }
 }
 
@@ -119,9 +119,12 @@ void LabelWriter::OnFrameTracked(const vo::FrameEvent& event) {
   FlushReady();
 }
 
+bool LabelWriter::InDepthRange(const vo::PointInfo& p) const {
+  return p.idepth > 0 && 1.0 / p.idepth <= options_.max_depth;
+}
+
 bool LabelWriter::Usable(const vo::PointInfo& p) const {
-  if (p.num_good_residuals < options_.min_good_residuals || !(p.idepth > 0)) return false;
-  if (1.0 / p.idepth > options_.max_depth) return false;
+  if (p.num_good_residuals < options_.min_good_residuals || !InDepthRange(p)) return false;
   if (!(p.idepth_hessian > 0) || camera_.FxB() / std::sqrt(p.idepth_hessian) > options_.max_disparity_stddev) {
     return false;
   }

@@ -109,6 +109,7 @@ class LabelWriter : public vo::OdometryObserver {
     int users = 0;                      // pending frames (+1 while among the recent past keyframes)
   };
 
+  bool InDepthRange(const vo::PointInfo& point) const;  // positive inverse depth, not beyond max_depth
   bool Usable(const vo::PointInfo& point) const;
   void AddUser(int host);
   void RemoveUser(int host);
