@@ -130,13 +130,18 @@ sim::Photometric StreetSimulator::Exposure(int i, int view) const {
   return p;
 }
 
+Eigen::Isometry3d StreetSimulator::WorldFromCamera(int i) const {
+  Require(i >= 0 && i < num_frames(), "frame index out of range");
+  return trajectory_[frame_poses_[i]];
+}
+
 SimulatedFrame StreetSimulator::Render(int i) const {
   Require(i >= 0 && i < num_frames(), "frame index out of range");
   SimulatedFrame frame;
   frame.index = i;
   frame.pose_index = frame_poses_[i];
   frame.timestamp = i * options_.stride * options_.frame_interval;
-  frame.T_world_camera = trajectory_[frame.pose_index];
+  frame.T_world_camera = WorldFromCamera(i);
   frame.T_first_camera = trajectory_[frame_poses_[0]].inverse() * frame.T_world_camera;
   frame.photometric = Exposure(i, 0);
   Eigen::Isometry3d T_world_right = frame.T_world_camera;

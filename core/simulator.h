@@ -77,6 +77,8 @@ class StreetSimulator {
   const SimulatorOptions& options() const { return options_; }
   const StereoCamera& camera() const { return options_.camera; }
   const sim::Scene& scene() const { return scene_; }
+  // Camera-to-world pose of output frame i's left camera (as rendered).
+  Eigen::Isometry3d WorldFromCamera(int i) const;
   // Renders output frame i (0 <= i < num_frames()); thread-safe, deterministic.
   SimulatedFrame Render(int i) const;
   // Exposure of output frame i.

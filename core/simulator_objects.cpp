@@ -32,8 +32,10 @@ struct Placement {
   double Walk(const PathSample& p, int side) const {
     return side == 0 ? p.profile.sidewalk_left : p.profile.sidewalk_right;
   }
-  // True when none of the points along the rectangle's outline is in the zone.
-  bool Free(const Vec3& centre, const Vec3& forward, double length, double width, Zone zone, double margin) const {
+  // True when none of the points along the rectangle's outline is in the zone
+  // (for an object `height` metres tall standing on the rectangle).
+  bool Free(const Vec3& centre, const Vec3& forward, double length, double width, Zone zone, double margin,
+            double height) const {
     const Vec3 f = forward.normalized(), r = scene->down.cross(f).normalized();
     const int nl = std::max(1, static_cast<int>(std::ceil(length / 1.5)));
     const int nw = std::max(1, static_cast<int>(std::ceil(width / 1.5)));
@@ -42,7 +44,7 @@ struct Placement {
         if (i != 0 && i != nl && k != 0 && k != nw) continue;  // outline only
         const Vec3 q = centre + f * (length * (static_cast<double>(i) / nl - 0.5)) +
                        r * (width * (static_cast<double>(k) / nw - 0.5));
-        if (path.InZone(q, zone, margin)) return false;
+        if (path.InZone(q, zone, margin, 0, 0, height)) return false;
       }
     return true;
   }
@@ -130,7 +132,7 @@ void BuildingRow(Placement& pl, int side, bool far, double s_begin, double s_end
       const Vec3 front_mid = mid.road + mid.right * (sign * lateral);
       const Vec3 inward = mid.right * sign;
       const Vec3 centre = front_mid + inward * (depth / 2);
-      if (pl.Free(centre, mid.tangent, length, depth, Zone::kStreet, 0.2)) {
+      if (pl.Free(centre, mid.tangent, length, depth, Zone::kStreet, 0.2, height)) {
         AddBuilding(pl, front_mid, mid.tangent, inward, length, depth, height);
         break;
       }
@@ -152,6 +154,8 @@ constexpr CarShape kCarShapes[] = {{0.675, 0.525, 0.05, 0.50, 3.8, 4.8},  {0.65,
                                    {0.68, 0.68, 0.12, 0.52, 4.4, 4.9},   {0.85, 0.58, 0.08, 0.62, 4.2, 4.9},
                                    {1.25, 0.78, 0.08, 0.55, 4.6, 5.4}};
 constexpr int kNumCarShapes = sizeof(kCarShapes) / sizeof(kCarShapes[0]);
+// Upper bound of any car's height (van: 0.3 m lift + 1.25 m body + 0.6 m cabin).
+constexpr double kMaxCarHeight = 2.5;
 
 void AddCar(Placement& pl, const Vec3& base, const Vec3& forward, double length, int shape) {
   const Eigen::Vector3f colour = pl.Colour(kCarColours);
@@ -231,7 +235,7 @@ void ParkedCars(Placement& pl, int side, double s_begin, double s_end) {
     const PathSample& mid = pl.At(s + length / 2);
     const Vec3 base = mid.road + mid.right * (sign * (pl.Edge(mid, side) - 1.15 - pl.U(0, 0.15)));
     const Vec3 forward = (pl.Chance(0.8) ? 1.0 : -1.0) * mid.tangent;
-    if (pl.Free(base, forward, length, 1.9, Zone::kLane, 0.3)) AddCar(pl, base, forward, length, shape);
+    if (pl.Free(base, forward, length, 1.9, Zone::kLane, 0.3, kMaxCarHeight)) AddCar(pl, base, forward, length, shape);
     s += length + pl.U(0.8, 6.0);
   }
 }
@@ -247,6 +251,10 @@ void AddTree(Placement& pl, const Vec3& base, double trunk_height, double crown_
   pl.builder->EndChunk();
   pl.scene->num_trees++;
 }
+
+// Heights (m) of hedges and bushes (a bush: blob of radius <= 1.3 m lifted by half of it).
+constexpr double kMinHedgeHeight = 1.0, kMaxHedgeHeight = 1.8;
+constexpr double kMaxBushHeight = 2.0;
 
 void Vegetation(Placement& pl, int side, double s_begin, double s_end) {
   const double sign = side == 0 ? -1.0 : 1.0;
@@ -269,7 +277,9 @@ void Vegetation(Placement& pl, int side, double s_begin, double s_end) {
       const Vec3 base = p.road + p.right * (sign * lateral) + pl.builder->up() * pl.options.curb_height;
       const double crown_h = pl.U(1.4, 2.8), crown_v = pl.U(1.5, 2.8);
       const double trunk = pl.U(2.0, 3.5);
-      if (!pl.path.InZone(base, Zone::kRoad, 0.3) && pl.Free(base, p.tangent, crown_h * 2, crown_h * 2, Zone::kLane, 0.5))
+      const double tree_height = trunk + 2 * crown_v;
+      if (!pl.path.InZone(base, Zone::kRoad, 0.3, 0, 0, tree_height) &&
+          pl.Free(base, p.tangent, crown_h * 2, crown_h * 2, Zone::kLane, 0.5, tree_height))
         AddTree(pl, base, trunk, crown_h, crown_v);
     }
     if (p.profile.green && pl.Chance(0.5 * std::min(1.0, density))) {
@@ -280,12 +290,13 @@ void Vegetation(Placement& pl, int side, double s_begin, double s_end) {
       if (pl.Chance(0.5)) {
         const double length = pl.U(4, 12);
         const Vec3 centre = base + p.right * (sign * 0.6);
-        if (pl.Free(centre, p.tangent, length, 1.2, Zone::kStreet, 0.1)) {
+        if (pl.Free(centre, p.tangent, length, 1.2, Zone::kStreet, 0.1, kMaxHedgeHeight)) {
           pl.builder->BeginChunk();
-          pl.builder->AddShadowBox(centre - pl.builder->up() * 0.2, p.tangent, length, 1.2, pl.U(1.0, 1.8), leaves, 1.5);
+          pl.builder->AddShadowBox(centre - pl.builder->up() * 0.2, p.tangent, length, 1.2,
+                                   pl.U(kMinHedgeHeight, kMaxHedgeHeight), leaves, 1.5);
           pl.builder->EndChunk();
         }
-      } else if (!pl.path.InZone(base, Zone::kStreet, 0.5)) {
+      } else if (!pl.path.InZone(base, Zone::kStreet, 0.5, 0, 0, kMaxBushHeight)) {
         pl.builder->BeginChunk();
         const double r = pl.U(0.6, 1.3);
         pl.builder->AddBlob(base + pl.builder->up() * (r * 0.5), r, r * 0.8, leaves, 1.5, pl.rng());
@@ -295,6 +306,9 @@ void Vegetation(Placement& pl, int side, double s_begin, double s_end) {
     s += gap;
   }
 }
+
+// Street lamp heights (m); signs are lower.
+constexpr double kMinLampHeight = 6.0, kMaxLampHeight = 8.0;
 
 void PolesAndSigns(Placement& pl, int side, double s_begin, double s_end) {
   const double sign = side == 0 ? -1.0 : 1.0;
@@ -309,10 +323,10 @@ void PolesAndSigns(Placement& pl, int side, double s_begin, double s_end) {
     const PathSample& p = pl.At(s);
     const double lateral = pl.Edge(p, side) + 0.45;
     const Vec3 base = p.road + p.right * (sign * lateral) + up * pl.options.curb_height;
-    if (!pl.path.InZone(base, Zone::kRoad, 0.2)) {
+    if (!pl.path.InZone(base, Zone::kRoad, 0.2, 0, 0, kMaxLampHeight)) {
       pl.builder->BeginChunk();
       if (pl.Chance(0.7)) {  // street lamp with an arm over the road
-        const double h = pl.U(6, 8);
+        const double h = pl.U(kMinLampHeight, kMaxLampHeight);
         pl.builder->AddCylinder(base, pl.U(0.08, 0.12), h, 8, metal, 1.0);
         const Vec3 arm_mid = base + up * (h - 0.1) - p.right * (sign * 0.8);
         pl.builder->AddBox(arm_mid, p.right, 1.8, 0.12, 0.1, metal, 1.0);

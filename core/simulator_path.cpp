@@ -116,8 +116,8 @@ std::pair<int, int> StreetPath::Cell(const Eigen::Vector3d& q) const {
           static_cast<int>(std::floor(q.dot(axis_b_) / cell_size_))};
 }
 
-bool StreetPath::InZone(const Eigen::Vector3d& q, Zone zone, double margin, int ignore_begin,
-                        int ignore_end) const {
+bool StreetPath::InZone(const Eigen::Vector3d& q, Zone zone, double margin, int ignore_begin, int ignore_end,
+                        double object_height) const {
   const auto cell = Cell(q);
   for (int da = -1; da <= 1; ++da)
     for (int db = -1; db <= 1; ++db) {
@@ -129,7 +129,9 @@ bool StreetPath::InZone(const Eigen::Vector3d& q, Zone zone, double margin, int 
         const PathSample& sample = samples_[j];
         if (sample.merged_into >= 0 && zone != Zone::kLane) continue;
         const Eigen::Vector3d d = q - sample.road;
-        if (std::abs(d.dot(down_)) > 4.0) continue;  // over- or underpass
+        // Height of q above this sample's road; the object spans [above, above + object_height].
+        const double above = -d.dot(down_);
+        if (above > kLevelClearance || above + object_height < -kLevelClearance) continue;  // over- or underpass
         if (std::abs(d.dot(sample.tangent)) > 0.75 * spacing_ + 0.1) continue;
         const double lateral = d.dot(sample.right);
         const StreetProfile& p = sample.profile;

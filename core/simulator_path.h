@@ -67,11 +67,19 @@ class StreetPath {
   // merged and widens the earlier sample's road to contain their lane.
   void MergeRevisits(double radius, double min_gap);
 
+  // Vertical clearance (m) between an object and a street at another level:
+  // a street whose road lies more than this above the object's top or below
+  // its bottom passes over or under it (a bridge), so it does not count.
+  static constexpr double kLevelClearance = 4.0;
+
   // True when the horizontal position of q lies in `zone` of any sample
   // (grown by margin metres), optionally ignoring samples with index in
   // [ignore_begin, ignore_end). Merged samples count only for Zone::kLane.
-  bool InZone(const Eigen::Vector3d& q, Zone zone, double margin, int ignore_begin = 0,
-              int ignore_end = 0) const;
+  // The object stands from q up to q + object_height: on a hill the same
+  // street climbs past a tall building, so a sample counts whenever its road
+  // comes within kLevelClearance of that vertical extent, not only of q.
+  bool InZone(const Eigen::Vector3d& q, Zone zone, double margin, int ignore_begin = 0, int ignore_end = 0,
+              double object_height = 0.0) const;
 
  private:
   std::pair<int, int> Cell(const Eigen::Vector3d& q) const;
