@@ -192,6 +192,23 @@ TEST(Config, AblationConfigsDifferFromTheShippedOneOnlyWhereTheySay) {
   ASSERT_EQ(expected_long.stages[4].name, "stack_Ko_semi");
   expected_long.stages[4].learning_rate = 5e-5;
   EXPECT_EQ(ConfigToYaml(v4_long), ConfigToYaml(expected_long));
+
+  // Table 1, mid-length: v4's first stage alone for 4 epochs (its LR halving starts later), with
+  // labels (semi) and without labels and L_S (self); nothing else differs between the two arms.
+  StackNetConfig expected_semi = v4;
+  expected_semi.train.output_dir = "runs/stacknet_cpu_v4_table1_semi";
+  expected_semi.stages.resize(1);
+  expected_semi.stages[0].epochs = 4;
+  expected_semi.stages[0].lr_halving_start = -1;
+  expected_semi.stages[0].lr_halving_every = 0;
+  EXPECT_EQ(ConfigToYaml(LoadConfig(configs + "stacknet_cpu_v4_table1_semi.yaml", false)), ConfigToYaml(expected_semi));
+  StackNetConfig expected_self = expected_semi;
+  expected_self.train.output_dir = "runs/stacknet_cpu_v4_table1_self";
+  expected_self.data.label_dir_left = "";
+  expected_self.datasets[0].second.label_dir_left = "";
+  expected_self.stages[0].name = "simple_Ko_self";
+  expected_self.stages[0].use_supervised = false;
+  EXPECT_EQ(ConfigToYaml(LoadConfig(configs + "stacknet_cpu_v4_table1_self.yaml", false)), ConfigToYaml(expected_self));
 }
 
 TEST(Data, SparseLabelsKeepTheirValuesScaledWithTheWidth) {
