@@ -134,7 +134,14 @@ void PrefetchResidual(const ResidualGeometry& g, const Point& point, double idep
   float x = point.u, y = point.v;
   const float d = static_cast<float>(idepth);
   if (g.kind == ResidualKind::kVirtualStereo) {
-    x -= g.fx * g.baseline * d;  // D^R read; the image read is near it after the disparity shift
+    // D^R is read at the shifted pixel u - fx B_v d; the image read that
+    // follows lands back near u (u - shift + D^R ~ u), prefetched below.
+    const int dx = static_cast<int>(x - g.fx * g.baseline * d) - kPatternRadius;
+    const int dy = static_cast<int>(y) - kPatternRadius;
+    const cv::Mat& map = *g.disparity;
+    if (dx >= 0 && dy >= 0 && dx + 2 * kPatternRadius + 1 < map.cols && dy + 2 * kPatternRadius + 1 < map.rows) {
+      for (int r = 0; r <= 2 * kPatternRadius + 1; ++r) __builtin_prefetch(map.ptr<float>(dy + r) + dx);
+    }
   } else {
     const Eigen::Vector3f q = g.R * Eigen::Vector3f((x - g.cx) / g.fx, (y - g.cy) / g.fy, 1.0f) + d * g.t;
     if (!(q.z() > 1e-6f)) return;
