@@ -142,7 +142,7 @@ SimulatedFrame StreetSimulator::Render(int i) const {
   frame.pose_index = frame_poses_[i];
   frame.timestamp = i * options_.stride * options_.frame_interval;
   frame.T_world_camera = WorldFromCamera(i);
-  frame.T_first_camera = trajectory_[frame_poses_[0]].inverse() * frame.T_world_camera;
+  frame.T_first_camera = WorldFromCamera(0).inverse() * frame.T_world_camera;
   frame.photometric = Exposure(i, 0);
   Eigen::Isometry3d T_world_right = frame.T_world_camera;
   T_world_right.translate(Eigen::Vector3d(options_.camera.baseline, 0, 0));
