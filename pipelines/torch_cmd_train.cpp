@@ -1,4 +1,4 @@
-// `dvso train --config FILE [--resume] [--resume-from CKPT] [--output-dir DIR]`:
+// `dvso train --config FILE [--resume] [--resume-from CKPT] [--init-from MODEL] [--output-dir DIR]`:
 // trains SimpleNet / StackNet through the config's stages (paper 5.1).
 // Ctrl-C writes a checkpoint and stops; --resume continues exactly there.
 #include <atomic>
@@ -25,6 +25,7 @@ struct TrainArgs {
   std::string output_dir;
   bool resume = false;
   std::string resume_from;
+  std::string init_from;
   std::vector<std::string> sequences;
 };
 
@@ -32,6 +33,7 @@ void RunTrain(const TrainArgs& args) {
   stacknet::StackNetConfig config = stacknet::LoadConfig(args.config, /*check=*/false);
   if (!args.output_dir.empty()) config.train.output_dir = args.output_dir;
   if (!args.sequences.empty()) config.data.sequences = args.sequences;
+  if (!args.init_from.empty()) config.train.init_from = args.init_from;
   try {
     config.Check();
   } catch (const Error& e) {
@@ -75,6 +77,9 @@ void AddTrainCommand(CLI::App& app) {
   cmd->add_option("--sequence", args->sequences, "Override data.sequences (repeatable)");
   cmd->add_flag("--resume", args->resume, "Continue from <output_dir>/checkpoint_last.pt");
   cmd->add_option("--resume-from", args->resume_from, "Continue from this checkpoint")->check(CLI::ExistingFile);
+  cmd->add_option("--init-from", args->init_from,
+                  "Start from the weights of a `dvso export` model (fine-tuning; overrides train.init_from)")
+      ->check(CLI::ExistingFile);
   cmd->callback([args] { RunTrain(*args); });
 }
 

@@ -115,6 +115,7 @@ void VisitTrain(Map& m, TrainOptions& o) {
   m.Get("device", &o.device);
   m.Get("num_threads", &o.num_threads);
   m.Get("progress", &o.progress);
+  m.Get("init_from", &o.init_from);
 }
 template <typename Map>
 void VisitStage(Map& m, StageOptions& o) {

@@ -3,6 +3,7 @@
 #include <torch/csrc/jit/frontend/tracer.h>
 
 #include <algorithm>
+#include <map>
 #include <sstream>
 
 #include "core/error.h"
@@ -67,6 +68,45 @@ void WriteModelWithMetadata(const std::string& in_path, const std::string& out_p
   WriteAtomically(out_path, [&](const std::string& temp) { module.save(temp, extra); });
 }
 
+namespace {
+// The name a module parameter gets in the exported mirror (TraceStackNet).
+std::string ExportedParameterName(std::string name) {
+  std::replace(name.begin(), name.end(), '.', '_');
+  return name;
+}
+}  // namespace
+
+int LoadWeightsFromExport(const std::string& model_path, StackNet& model) {
+  torch::jit::Module module;
+  try {
+    module = torch::jit::load(model_path, torch::kCPU);
+  } catch (const c10::Error& e) {
+    throw Error(model_path, std::string("not a TorchScript model: ") + e.what_without_backtrace());
+  }
+  std::map<std::string, torch::Tensor> exported;
+  for (const auto& item : module.named_parameters(/*recurse=*/false)) exported.emplace(item.name, item.value);
+  RequireFile(!exported.empty(), model_path, "has no parameters: not a model written by `dvso export`");
+  const bool has_residual = module.hasattr("uses_residual") && module.attr("uses_residual").toBool();
+  torch::NoGradGuard no_grad;
+  int copied = 0;
+  for (const auto& item : model->named_parameters()) {
+    const bool residual = item.key().rfind("residual.", 0) == 0;
+    if (residual && !has_residual) continue;  // SimpleNet export: ResidualNet keeps its initialisation
+    const auto it = exported.find(ExportedParameterName(item.key()));
+    RequireFile(it != exported.end(), model_path,
+                "has no weight '" + item.key() + "': exported from another architecture than the config's network");
+    RequireFile(it->second.sizes() == item.value().sizes(), model_path,
+                "weight '" + item.key() + "' has another shape than the config's network (another width or depth)");
+    item.value().copy_(it->second.to(item.value().device()));
+    exported.erase(it);
+    ++copied;
+  }
+  RequireFile(exported.empty(), model_path,
+              "has weights the config's network does not (e.g. '" + (exported.empty() ? "" : exported.begin()->first) +
+                  "'): another architecture");
+  return copied;
+}
+
 std::pair<torch::Tensor, torch::Tensor> InferPixels(StackNet& model, bool use_residual, const torch::Tensor& image) {
   const DisparityPyramid d =
       use_residual ? model->forward(image).refined : model->simple_net()->forward(image);
@@ -80,10 +120,9 @@ torch::jit::Module TraceStackNet(StackNet& model, bool use_residual, int input_h
   model->to(torch::kCPU);
   torch::jit::Module mirror(use_residual ? "DvsoStackNet" : "DvsoSimpleNet");
   for (const auto& item : model->named_parameters()) {
-    std::string name = item.key();
     // A SimpleNet export carries only SimpleNet's weights.
-    if (!use_residual && name.rfind("residual.", 0) == 0) continue;
-    std::replace(name.begin(), name.end(), '.', '_');
+    if (!use_residual && item.key().rfind("residual.", 0) == 0) continue;
+    const std::string name = ExportedParameterName(item.key());
     // Same tensor object: the tracer maps it to `self.<name>` instead of a constant.
     mirror.register_parameter(name, item.value(), /*is_buffer=*/false);
   }

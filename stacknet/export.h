@@ -61,6 +61,15 @@ void WriteModelWithMetadata(const std::string& in_path, const std::string& out_p
 std::string ExportCheckpoint(const std::string& checkpoint_path, const std::string& out_path,
                              const ExportOptions& options = {});
 
+// Initialises `model` from the weights of a file written by `dvso export`
+// (fine-tuning the shipped model on one's own labels, or continuing a run whose
+// checkpoints are gone). Parameters are matched by name (the export's
+// `a_b_c` for the module's `a.b.c`) and must have the same shapes: a file of
+// another architecture is an error naming it, never a partial load. A SimpleNet
+// export sets SimpleNet only (the ResidualNet keeps its initialisation).
+// Returns the number of tensors copied.
+int LoadWeightsFromExport(const std::string& model_path, StackNet& model);
+
 // Exports a randomly initialised network of the given architecture (latency
 // benchmarks need no trained weights). model: "simple" or "stack".
 std::string ExportRandomInit(const NetworkOptions& network, const std::string& model, const std::string& out_path);

@@ -102,6 +102,9 @@ struct TrainOptions {
   std::string device = "auto";       // auto | cpu | cuda
   int num_threads = 0;               // CPU intra-op threads; 0 = hardware cores
   bool progress = true;              // progress bar on stderr
+  // A model file from `dvso export` whose weights replace the seeded initialisation
+  // (fine-tuning; "" = train from scratch). Ignored on resume: the checkpoint has the weights.
+  std::string init_from;
   void Check() const;
 };
 

@@ -1,5 +1,7 @@
 #include "stacknet/trainer.h"
 
+#include "stacknet/export.h"
+
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -16,6 +18,7 @@
 #include "core/progress.h"
 #include "stacknet/config.h"
 #include "stacknet/data_loader.h"
+#include "stacknet/export.h"
 #include "stacknet/dataset.h"
 #include "stacknet/device.h"
 
@@ -142,6 +145,11 @@ TrainResult Trainer::Run(const std::string& resume_checkpoint) {
     std::cerr << "Resuming from " << resume_checkpoint << " at stage " << info.position.stage << ", epoch "
               << info.position.epoch << ", batch " << info.position.batch << " (step " << info.position.global_step
               << ")\n";
+  }
+  if (!resume && !train.init_from.empty()) {
+    const int copied = LoadWeightsFromExport(train.init_from, model_);
+    model_->to(device_);
+    std::cerr << "Initialised " << copied << " weight tensors from " << train.init_from << "\n";
   }
   std::ofstream csv = OpenLossCsv(JoinPath(train.output_dir, "losses.csv"), info.position.global_step, resume);
   std::ofstream epochs_log(JoinPath(train.output_dir, "epochs.jsonl"), resume ? std::ios::app : std::ios::trunc);

@@ -106,6 +106,58 @@ TEST(Export, CheckpointExportUsesTheTrainedNetwork) {
   fs::remove_all(dir);
 }
 
+TEST(Export, ExportedWeightsInitialiseANewNetworkForFineTuning) {
+  torch::manual_seed(21);
+  StackNet source(testing::TinyNetwork());
+  {
+    torch::NoGradGuard no_grad;
+    for (auto& p : source->residual_net()->parameters()) p.add_(torch::randn_like(p) * 0.005);
+  }
+  source->eval();
+  const fs::path dir = fs::path(dvso::testing::ScratchPath("export_init"));
+  fs::create_directories(dir);
+  const std::string stack_path = (dir / "stack.pt").string();
+  const std::string simple_path = (dir / "simple.pt").string();
+  TraceStackNet(source, /*use_residual=*/true, 32, 64).save(stack_path);
+  TraceStackNet(source, /*use_residual=*/false, 32, 64).save(simple_path);
+  const torch::Tensor image = torch::rand({1, 3, 32, 64});
+  torch::NoGradGuard no_grad;
+  const auto [source_left, source_right] = InferPixels(source, true, image);
+
+  // Another seed gives other weights; loading the StackNet export makes it the same network.
+  torch::manual_seed(22);
+  StackNet target(testing::TinyNetwork());
+  target->eval();
+  EXPECT_GT(MaxDifference(InferPixels(target, true, image).first, source_left), 1e-3);
+  EXPECT_EQ(LoadWeightsFromExport(stack_path, target), static_cast<int>(source->parameters().size()));
+  EXPECT_LT(MaxDifference(InferPixels(target, true, image).first, source_left), 1e-6);
+  EXPECT_LT(MaxDifference(InferPixels(target, true, image).second, source_right), 1e-6);
+
+  // A SimpleNet export sets SimpleNet and leaves the ResidualNet as it was.
+  torch::manual_seed(23);
+  StackNet partial(testing::TinyNetwork());
+  partial->eval();
+  const torch::Tensor residual_before = partial->residual_net()->parameters().front().clone();
+  EXPECT_EQ(LoadWeightsFromExport(simple_path, partial), static_cast<int>(source->simple_net()->parameters().size()));
+  EXPECT_LT(MaxDifference(InferPixels(partial, false, image).first, InferPixels(source, false, image).first), 1e-6);
+  EXPECT_EQ(MaxDifference(partial->residual_net()->parameters().front(), residual_before), 0.0);
+
+  // Another architecture (twice the width) is an error naming the file, not a partial load.
+  NetworkOptions wider = testing::TinyNetwork();
+  wider.width_multiplier = 0.25;
+  StackNet other(wider);
+  try {
+    LoadWeightsFromExport(stack_path, other);
+    FAIL() << "weights of another width were loaded";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("stack.pt"), std::string::npos) << e.what();
+  }
+  // A file that is not TorchScript.
+  std::ofstream((dir / "text.pt").string()) << "not a model";
+  EXPECT_THROW(LoadWeightsFromExport((dir / "text.pt").string(), target), Error);
+  fs::remove_all(dir);
+}
+
 TEST(Export, ShippedModelNamesTheConfigItWasTrainedWith) {
   // Issue 10: the metadata carries the training config's name; for the shipped model that config
   // is in configs/ and describes the network in the file.

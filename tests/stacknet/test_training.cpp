@@ -11,6 +11,7 @@
 #include "stacknet/config.h"
 #include "stacknet/data_loader.h"
 #include "stacknet/dataset.h"
+#include "stacknet/export.h"
 #include "stacknet/trainer.h"
 #include "stacknet_test_util.h"
 #include "tests/temp_dir.h"
@@ -326,6 +327,33 @@ TEST_F(SimulatedTraining, FewCpuStepsThroughAllStagesWriteCheckpointsAndLogs) {
   // Every checkpoint names its config, so `dvso export` can write it into the model's metadata.
   EXPECT_EQ(ReadCheckpointInfo(out + "/checkpoint_stage0_simple_semi.pt").config_name, "stacknet_tiny");
   EXPECT_EQ(ReadCheckpointInfo(out + "/checkpoint_final.pt").config_name, "stacknet_tiny");
+}
+
+TEST_F(SimulatedTraining, InitFromStartsFromTheWeightsOfAnExportedModel) {
+  // A source network, trained a few steps and exported as users get it from `dvso export`.
+  const std::string source_dir = TempDir("init_source");
+  Trainer source(TinyConfig(source_dir));
+  ASSERT_TRUE(source.Run().finished);
+  const std::string model_path = source_dir + "/model.pt";
+  ExportCheckpoint(source_dir + "/checkpoint_final.pt", model_path);
+
+  // Distance of a trainer's weights from the source's after one step of its schedule.
+  auto distance_after_one_step = [&](const std::string& init_from, const std::string& name) {
+    StackNetConfig config = TinyConfig(TempDir(name));
+    config.train.seed += 1;  // another seeded initialisation than the source's
+    config.train.init_from = init_from;
+    EXPECT_EQ(ConfigToYaml(ParseConfig(ConfigToYaml(config))), ConfigToYaml(config));  // the key round-trips
+    Trainer trainer(config, [](const TrainingPosition& p) { return p.global_step == 1; });
+    EXPECT_TRUE(trainer.Run().interrupted);
+    double sum = 0;
+    const auto a = source.model()->named_parameters();
+    const auto b = trainer.model()->named_parameters();
+    for (size_t i = 0; i < a.size(); ++i) sum += (a[i].value() - b[i].value()).abs().sum().item<double>();
+    return sum;
+  };
+  const double from_scratch = distance_after_one_step("", "init_none");
+  const double initialised = distance_after_one_step(model_path, "init_model");
+  EXPECT_LT(initialised, 0.05 * from_scratch) << initialised << " vs " << from_scratch;
 }
 
 TEST_F(SimulatedTraining, ResumeAfterAnInterruptionContinuesExactly) {
