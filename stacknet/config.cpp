@@ -76,6 +76,7 @@ void VisitLoss(Map& m, LossOptions& o) {
   m.Get("alpha_occ", &o.alpha_occ);
   m.Get("ssim_alpha", &o.ssim_alpha);
   m.Get("berhu_fraction", &o.berhu_fraction);
+  m.Get("relative_supervision", &o.relative_supervision);
   m.Get("num_scales", &o.num_scales);
 }
 template <typename Map>

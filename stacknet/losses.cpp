@@ -34,12 +34,17 @@ torch::Tensor BerHu(const torch::Tensor& residual, const torch::Tensor& threshol
   return torch::where(a <= c, a, (a * a + c * c) / (2 * c));
 }
 
+// Labels are width fractions; 1e-4 (0.06 px at 640) only guards a zero label.
+constexpr double kMinRelativeLabel = 1e-4;
+
 torch::Tensor SupervisedLoss(const torch::Tensor& prediction, const torch::Tensor& label, const torch::Tensor& mask,
-                             double threshold_fraction) {
+                             double threshold_fraction, bool relative) {
   const torch::Tensor valid = mask > 0.5;
   const int64_t count = valid.sum().item<int64_t>();
   if (count == 0) return prediction.sum() * 0;  // keeps the graph; no labels in this batch
-  const torch::Tensor residual = prediction.masked_select(valid) - label.masked_select(valid);
+  const torch::Tensor labels = label.masked_select(valid);
+  torch::Tensor residual = prediction.masked_select(valid) - labels;
+  if (relative) residual = residual * (labels.mean() / labels.clamp_min(kMinRelativeLabel));
   // The threshold is a batch statistic, not a path for gradients (Laina et al.).
   const torch::Tensor threshold = threshold_fraction * residual.abs().max().detach();
   return BerHu(residual, threshold).sum() / static_cast<double>(count);
@@ -108,8 +113,10 @@ LossTerms TotalLoss(const DisparityPyramid& d, const StereoBatch& batch, const L
       const torch::Tensor dl_full = factor == 1 ? dl : UpsampleBilinear(dl, factor);
       const torch::Tensor dr_full = factor == 1 ? dr : UpsampleBilinear(dr, factor);
       const torch::Tensor t =
-          options.alpha_s * (SupervisedLoss(dl_full, batch.left_label, batch.left_mask, options.berhu_fraction) +
-                             SupervisedLoss(dr_full, batch.right_label, batch.right_mask, options.berhu_fraction));
+          options.alpha_s * (SupervisedLoss(dl_full, batch.left_label, batch.left_mask, options.berhu_fraction,
+                                            options.relative_supervision) +
+                             SupervisedLoss(dr_full, batch.right_label, batch.right_mask, options.berhu_fraction,
+                                            options.relative_supervision));
       total = total + t;
       terms.supervised += t.item<double>();
     }

@@ -25,8 +25,12 @@ torch::Tensor BerHu(const torch::Tensor& residual, const torch::Tensor& threshol
 // Eq. (3): mean berHu of (prediction - label) over labelled pixels (mask > 0),
 // threshold = fraction * max |residual| over the batch's labelled pixels.
 // prediction, label, mask: N x 1 x H x W at the same resolution. 0 when no labels.
+// relative = true (not the paper's): each residual is taken relative to its label and
+// multiplied by the batch's mean label, r_i * mean(label) / label_i: the loss keeps
+// its magnitude, but a 10 % error weighs as much at 2 px as at 40 px (a disparity error
+// of x % is a depth error of ~x %, what the odometry inherits).
 torch::Tensor SupervisedLoss(const torch::Tensor& prediction, const torch::Tensor& label, const torch::Tensor& mask,
-                             double threshold_fraction);
+                             double threshold_fraction, bool relative = false);
 
 // Eq. (4), left: mean |d_l(x) - d_r(x - d_l(x))|. For the right term pass
 // (d_r, d_l, +1): mean |d_r(x) - d_l(x + d_r(x))|.

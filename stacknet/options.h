@@ -37,6 +37,7 @@ struct LossOptions {
   double alpha_occ = 0.01;       // occlusion regulariser L_occ (eq. 6)
   double ssim_alpha = 0.84;      // SSIM vs L1 balance inside L_U (eq. 2)
   double berhu_fraction = 0.2;   // berHu threshold = fraction * max |residual| over labelled pixels
+  bool relative_supervision = false;  // L_S on r * mean(label) / label (far labels weigh as near ones); paper: false
   int num_scales = 4;            // output scales summed in eq. (1)
   void Check() const;
 };

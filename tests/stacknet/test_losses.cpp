@@ -47,6 +47,11 @@ TEST(Losses, BerHuSupervisedHandComputed) {
   EXPECT_NEAR(SupervisedLoss(prediction, label, mask, 0.6).item<double>(), (0.5 + 1.0 + 5.44 / 2.4) / 3.0, 1e-6);
   // No labelled pixel: no supervised signal.
   EXPECT_EQ(SupervisedLoss(prediction, label, torch::zeros_like(mask), 0.2).item<double>(), 0.0);
+  // Relative: labels 1.5, 1, 1 (mean 7/6); residuals -0.5, 1, 2 -> -0.5 * (7/6) / 1.5 = -7/18, 7/6, 7/3;
+  // c = 0.6 * 7/3 = 1.4: 7/18 and 7/6 are L1, 7/3 is ((7/3)^2 + 1.96) / 2.8.
+  const double r3 = 7.0 / 3.0;
+  EXPECT_NEAR(SupervisedLoss(prediction, label, mask, 0.6, /*relative=*/true).item<double>(),
+              (7.0 / 18.0 + 7.0 / 6.0 + (r3 * r3 + 1.96) / 2.8) / 3.0, 1e-6);
 }
 
 TEST(Losses, BerHuGradientIsSignInTheL1PartAndResidualOverCInTheL2Part) {
