@@ -39,14 +39,18 @@ bool TrainingCameraFromConfig(const std::string& config_yaml, double* baseline, 
   return false;
 }
 
+torch::jit::Module LoadTorchScript(const std::string& path, const torch::Device& device,
+                                   torch::jit::ExtraFilesMap* extra) {
+  try {
+    return extra != nullptr ? torch::jit::load(path, device, *extra) : torch::jit::load(path, device);
+  } catch (const c10::Error& e) {
+    throw Error(path, std::string("not a TorchScript model: ") + e.what_without_backtrace());
+  }
+}
+
 ModelMetadata ReadModelMetadata(const std::string& model_path) {
   torch::jit::ExtraFilesMap extra{{kModelMetadataFile, ""}};
-  torch::jit::Module module;
-  try {
-    module = torch::jit::load(model_path, torch::kCPU, extra);
-  } catch (const c10::Error& e) {
-    throw Error(model_path, std::string("not a TorchScript model: ") + e.what_without_backtrace());
-  }
+  const torch::jit::Module module = LoadTorchScript(model_path, torch::kCPU, &extra);
   ModelMetadata m;
   const std::string& json = extra[kModelMetadataFile];
   if (!json.empty()) m = ModelMetadata::FromJson(json, model_path + " (" + kModelMetadataFile + ")");
@@ -58,12 +62,7 @@ ModelMetadata ReadModelMetadata(const std::string& model_path) {
 }
 
 void WriteModelWithMetadata(const std::string& in_path, const std::string& out_path, const ModelMetadata& metadata) {
-  torch::jit::Module module;
-  try {
-    module = torch::jit::load(in_path, torch::kCPU);
-  } catch (const c10::Error& e) {
-    throw Error(in_path, std::string("not a TorchScript model: ") + e.what_without_backtrace());
-  }
+  torch::jit::Module module = LoadTorchScript(in_path, torch::kCPU);
   const torch::jit::ExtraFilesMap extra{{kModelMetadataFile, metadata.ToJson()}};
   WriteAtomically(out_path, [&](const std::string& temp) { module.save(temp, extra); });
 }
@@ -74,15 +73,12 @@ std::string ExportedParameterName(std::string name) {
   std::replace(name.begin(), name.end(), '.', '_');
   return name;
 }
+// ResidualNet's parameters, which a SimpleNet export does not carry.
+bool IsResidualParameter(const std::string& name) { return name.rfind("residual.", 0) == 0; }
 }  // namespace
 
 int LoadWeightsFromExport(const std::string& model_path, StackNet& model) {
-  torch::jit::Module module;
-  try {
-    module = torch::jit::load(model_path, torch::kCPU);
-  } catch (const c10::Error& e) {
-    throw Error(model_path, std::string("not a TorchScript model: ") + e.what_without_backtrace());
-  }
+  const torch::jit::Module module = LoadTorchScript(model_path, torch::kCPU);
   std::map<std::string, torch::Tensor> exported;
   for (const auto& item : module.named_parameters(/*recurse=*/false)) exported.emplace(item.name, item.value);
   RequireFile(!exported.empty(), model_path, "has no parameters: not a model written by `dvso export`");
@@ -90,8 +86,8 @@ int LoadWeightsFromExport(const std::string& model_path, StackNet& model) {
   torch::NoGradGuard no_grad;
   int copied = 0;
   for (const auto& item : model->named_parameters()) {
-    const bool residual = item.key().rfind("residual.", 0) == 0;
-    if (residual && !has_residual) continue;  // SimpleNet export: ResidualNet keeps its initialisation
+    // A SimpleNet export: the ResidualNet keeps its initialisation.
+    if (IsResidualParameter(item.key()) && !has_residual) continue;
     const auto it = exported.find(ExportedParameterName(item.key()));
     RequireFile(it != exported.end(), model_path,
                 "has no weight '" + item.key() + "': exported from another architecture than the config's network");
@@ -121,7 +117,7 @@ torch::jit::Module TraceStackNet(StackNet& model, bool use_residual, int input_h
   torch::jit::Module mirror(use_residual ? "DvsoStackNet" : "DvsoSimpleNet");
   for (const auto& item : model->named_parameters()) {
     // A SimpleNet export carries only SimpleNet's weights.
-    if (!use_residual && item.key().rfind("residual.", 0) == 0) continue;
+    if (!use_residual && IsResidualParameter(item.key())) continue;
     const std::string name = ExportedParameterName(item.key());
     // Same tensor object: the tracer maps it to `self.<name>` instead of a constant.
     mirror.register_parameter(name, item.value(), /*is_buffer=*/false);

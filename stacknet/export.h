@@ -48,6 +48,11 @@ struct ExportOptions {
 // then named datasets) that can be opened. False when none can.
 bool TrainingCameraFromConfig(const std::string& config_yaml, double* baseline, double* fx_over_width);
 
+// torch::jit::load with the one error every command gives for a file that is not
+// TorchScript (dvso::Error naming it). `extra` (optional) receives the named extra files.
+torch::jit::Module LoadTorchScript(const std::string& path, const torch::Device& device,
+                                   torch::jit::ExtraFilesMap* extra = nullptr);
+
 // Reads the metadata of a TorchScript file written by `dvso export` (input
 // size from the attributes for files without the JSON entry). Throws dvso::Error.
 ModelMetadata ReadModelMetadata(const std::string& model_path);

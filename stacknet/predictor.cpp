@@ -22,11 +22,7 @@ TorchDisparityPredictor::TorchDisparityPredictor(const std::string& model_path, 
   options_.Check();
   RequireFile(std::filesystem::is_regular_file(model_path), model_path, "model file does not exist");
   torch::jit::ExtraFilesMap extra{{kModelMetadataFile, ""}};
-  try {
-    module_ = torch::jit::load(model_path, device_, extra);
-  } catch (const c10::Error& e) {
-    throw Error(model_path, std::string("not a TorchScript model: ") + e.what_without_backtrace());
-  }
+  module_ = LoadTorchScript(model_path, device_, &extra);
   module_.eval();
   RequireFile(module_.hasattr("input_width") && module_.hasattr("input_height"), model_path,
               "not a dvso export (no input_width/input_height attributes)");

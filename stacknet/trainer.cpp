@@ -1,7 +1,5 @@
 #include "stacknet/trainer.h"
 
-#include "stacknet/export.h"
-
 #include <chrono>
 #include <cmath>
 #include <cstdio>
