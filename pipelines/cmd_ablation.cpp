@@ -26,7 +26,8 @@ void Run(const AblationArgs& args) {
   const double default_bv = setup.predictions.untuned_virtual_baseline;
   const std::string& out = args.experiment.out;
   std::ostream& log = args.experiment.json ? std::cerr : std::cout;
-  log << "dvso ablation: " << args.experiment.sequence << ", predictions: " << setup.predictions.description << "\n";
+  log << "dvso ablation: " << args.experiment.sequence << ", predictions: " << setup.predictions.description
+      << ", schedule: " << setup.options.dvso.prediction_timing << "\n";
 
   double tuned = args.tuned_baseline;
   std::string tuned_how = "given (--tuned-baseline)";
@@ -65,6 +66,7 @@ void Run(const AblationArgs& args) {
     nlohmann::json j;
     j["sequence"] = args.experiment.sequence;
     j["predictions"] = setup.predictions.description;
+    j["prediction_timing"] = setup.options.dvso.prediction_timing;
     j["virtual_baseline_default"] = default_bv;
     j["virtual_baseline_tuned"] = tuned;
     j["tuned_by"] = tuned_how;

@@ -91,7 +91,7 @@ void AddOdometryCommand(CLI::App& app) {
   cmd->add_option("--mode", args->mode,
                   "mono (DSO) | stereo (Stereo DSO) | dvso (monocular + predicted disparities, metric)")
       ->check(CLI::IsMember({"mono", "stereo", "dvso"}));
-  AddPredictionOptions(cmd, &args->predictions);
+  AddPredictionOptions(cmd, &args->predictions, vo::OdometryOptions().dvso.prediction_timing);
   cmd->add_option("--config", args->config, "YAML options (strict keys; applied on top of the preset)");
   cmd->add_option("--preset", args->preset, "default (2000 points) | fast (800 points)")
       ->check(CLI::IsMember({"default", "fast"}));

@@ -45,10 +45,12 @@ void AddTuneBaselineCommand(CLI::App& app) {
       nlohmann::json j;
       j["default_virtual_baseline"] = default_bv;
       j["best_virtual_baseline"] = best;
+      j["prediction_timing"] = setup.options.dvso.prediction_timing;
       for (const VariantResult& r : results) j["runs"].push_back(r.ToJson());
       std::cout << j.dump(2) << std::endl;
     } else {
-      std::cout << FormatVariantTable(results) << "best virtual baseline: " << best << " m (default " << default_bv
+      std::cout << "schedule: " << setup.options.dvso.prediction_timing << "\n"
+                << FormatVariantTable(results) << "best virtual baseline: " << best << " m (default " << default_bv
                 << " m); use it with --virtual-baseline " << best << "\n";
     }
   });

@@ -63,12 +63,14 @@ void AddExperimentOptions(CLI::App* cmd, ExperimentArgs* args) {
   cmd->add_option("--cameras", args->cameras, "KITTI raw drives: grey (00/01) or colour (02/03, read as grey) pair")
       ->capture_default_str();
   cmd->add_flag("--json", args->json, "Print exactly one JSON object on stdout");
-  AddPredictionOptions(cmd, &args->predictions);
+  AddPredictionOptions(cmd, &args->predictions, kExperimentPredictionTiming);
 }
 
 ExperimentSetup OpenExperiment(const ExperimentArgs& args) {
   ExperimentSetup setup;
   setup.options = vo::OdometryOptions::Preset(args.preset);
+  // Under the config file and the flag, so either still decides.
+  setup.options.dvso.prediction_timing = kExperimentPredictionTiming;
   if (!args.config.empty()) setup.options = vo::LoadOdometryOptions(args.config, setup.options);
   setup.sequence = OpenSequence(args.sequence, args.camera_file, ParseCameraPair(args.cameras));
   setup.gt = ReadTrajectory(args.gt, TrajectoryFormat::kKitti);

@@ -39,6 +39,12 @@ VariantResult RunVariant(const std::string& name, const SequenceReader& sequence
                          vo::OdometryMode mode, const vo::OdometryOptions& options, DisparitySource* predictions,
                          int count, const std::string& out_dir);
 
+// The prediction schedule of `ablation` and `tune-baseline` unless a config file or
+// --prediction-schedule says otherwise: their rows are compared with each other, and
+// keyframe-async results vary by ~1.5 points t_rel between identical runs (the prediction's
+// arrival depends on load; docs/dvso.md), keyframe-blocking is deterministic.
+inline constexpr const char* kExperimentPredictionTiming = "keyframe-blocking";
+
 // Options both experiment commands take.
 struct ExperimentArgs {
   std::string sequence, gt, out, config, preset = "default", camera_file, cameras = "grey";

@@ -17,7 +17,7 @@ void PredictionSourceArgs::Check() const {
   Require(threads >= 0, "--inference-threads must be >= 0");
 }
 
-void AddPredictionOptions(CLI::App* cmd, PredictionSourceArgs* args) {
+void AddPredictionOptions(CLI::App* cmd, PredictionSourceArgs* args, const std::string& default_schedule) {
   cmd->add_option("--model", args->model,
                   std::string("dvso: TorchScript model from `dvso export`, run online (default: ") + kShippedModel + ")");
   cmd->add_option("--disparity-left", args->disparity_left,
@@ -27,8 +27,9 @@ void AddPredictionOptions(CLI::App* cmd, PredictionSourceArgs* args) {
   cmd->add_option("--virtual-baseline", args->virtual_baseline,
                   "dvso: b_v in metres (default: from the model's training camera, or the sequence's baseline for files)");
   cmd->add_option("--prediction-schedule", args->schedule,
-                  "dvso: keyframe-async (default: a keyframe's prediction runs on a worker while the next frames are "
-                  "tracked) | keyframe-blocking | speculative (every frame predicted while it is tracked)")
+                  "dvso: keyframe-async (a keyframe's prediction runs on a worker while the next frames are tracked) | "
+                  "keyframe-blocking (tracking waits for it: deterministic) | speculative (every frame predicted while "
+                  "it is tracked); default: the config's dvso.prediction_timing, else " + default_schedule)
       ->check(CLI::IsMember({"keyframe-async", "keyframe-blocking", "speculative"}));
   cmd->add_option("--inference-threads", args->threads,
                   "dvso with a model: LibTorch threads (default 1: fastest beside the odometry on 2 cores; 0 = cores)");

@@ -48,12 +48,14 @@ PredictionSource OpenPredictionSource(const PredictionSourceArgs& args, const Se
 std::unique_ptr<DisparitySource> OpenModelDisparitySource(const std::string& path, int threads,
                                                           ModelMetadata* metadata);
 
-// Adds --model, --disparity-left/right, --virtual-baseline, --prediction-schedule,
-// --inference-threads to a subcommand.
 // Applies what the flags say to the odometry options (b_v, prediction timing).
 void ApplyPredictionSource(const PredictionSourceArgs& args, const PredictionSource& source,
                            vo::OdometryOptions* options);
-void AddPredictionOptions(CLI::App* cmd, PredictionSourceArgs* args);
+
+// Adds --model, --disparity-left/right, --virtual-baseline, --prediction-schedule,
+// --inference-threads to a subcommand; `default_schedule` is what --help names as the
+// schedule used when neither the flag nor a config file sets one.
+void AddPredictionOptions(CLI::App* cmd, PredictionSourceArgs* args, const std::string& default_schedule);
 
 // Copies a TorchScript model with new metadata (torch builds; others throw).
 void WriteModelWithTunedBaseline(const std::string& in_path, const std::string& out_path, const ModelMetadata& metadata);

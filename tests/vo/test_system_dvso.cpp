@@ -354,6 +354,24 @@ TEST(DvsoCli, AblationAndTuneBaselinePrintEveryRow) {
   ASSERT_EQ(t["runs"].size(), 3u);
   EXPECT_NEAR(t["best_virtual_baseline"].get<double>(), 0.54, 1e-9);  // the true baseline is 0.537
   EXPECT_NE(dvso::testing::RunDvso("tune-baseline --values 0.6:0.1:0.3 --out " + dir + "/bad" + common).exit_code, 0);
+  // Experiments default to the deterministic schedule, written into every run's config.yaml; a config file's
+  // dvso.prediction_timing and then the flag still decide.
+  EXPECT_EQ(j["prediction_timing"], "keyframe-blocking");
+  EXPECT_EQ(t["prediction_timing"], "keyframe-blocking");
+  std::ifstream saved_config(dir + "/abl/full/config.yaml");
+  const std::string saved((std::istreambuf_iterator<char>(saved_config)), std::istreambuf_iterator<char>());
+  EXPECT_NE(saved.find("prediction_timing: keyframe-blocking"), std::string::npos) << saved;
+  std::ofstream(dir + "/async.yaml") << "dvso:\n  prediction_timing: keyframe-async\n";
+  const std::string one_run = " --json --values 0.54:0.1:0.54 --count 8";
+  const auto from_config = dvso::testing::RunDvso("tune-baseline --out " + dir + "/t_config --config " + dir +
+                                                  "/async.yaml" + one_run + common, /*merge_stderr=*/false);
+  ASSERT_EQ(from_config.exit_code, 0) << from_config.out;
+  EXPECT_EQ(nlohmann::json::parse(from_config.out)["prediction_timing"], "keyframe-async");
+  const auto from_flag = dvso::testing::RunDvso("tune-baseline --out " + dir + "/t_flag --config " + dir +
+                                                "/async.yaml --prediction-schedule speculative" + one_run + common,
+                                                /*merge_stderr=*/false);
+  ASSERT_EQ(from_flag.exit_code, 0) << from_flag.out;
+  EXPECT_EQ(nlohmann::json::parse(from_flag.out)["prediction_timing"], "speculative");
 }
 
 }  // namespace
