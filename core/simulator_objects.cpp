@@ -44,7 +44,7 @@ struct Placement {
         if (i != 0 && i != nl && k != 0 && k != nw) continue;  // outline only
         const Vec3 q = centre + f * (length * (static_cast<double>(i) / nl - 0.5)) +
                        r * (width * (static_cast<double>(k) / nw - 0.5));
-        if (path.InZone(q, zone, margin, 0, 0, height)) return false;
+        if (path.InZone(q, zone, margin, height)) return false;
       }
     return true;
   }
@@ -278,7 +278,7 @@ void Vegetation(Placement& pl, int side, double s_begin, double s_end) {
       const double crown_h = pl.U(1.4, 2.8), crown_v = pl.U(1.5, 2.8);
       const double trunk = pl.U(2.0, 3.5);
       const double tree_height = trunk + 2 * crown_v;
-      if (!pl.path.InZone(base, Zone::kRoad, 0.3, 0, 0, tree_height) &&
+      if (!pl.path.InZone(base, Zone::kRoad, 0.3, tree_height) &&
           pl.Free(base, p.tangent, crown_h * 2, crown_h * 2, Zone::kLane, 0.5, tree_height))
         AddTree(pl, base, trunk, crown_h, crown_v);
     }
@@ -296,7 +296,7 @@ void Vegetation(Placement& pl, int side, double s_begin, double s_end) {
                                    pl.U(kMinHedgeHeight, kMaxHedgeHeight), leaves, 1.5);
           pl.builder->EndChunk();
         }
-      } else if (!pl.path.InZone(base, Zone::kStreet, 0.5, 0, 0, kMaxBushHeight)) {
+      } else if (!pl.path.InZone(base, Zone::kStreet, 0.5, kMaxBushHeight)) {
         pl.builder->BeginChunk();
         const double r = pl.U(0.6, 1.3);
         pl.builder->AddBlob(base + pl.builder->up() * (r * 0.5), r, r * 0.8, leaves, 1.5, pl.rng());
@@ -323,7 +323,7 @@ void PolesAndSigns(Placement& pl, int side, double s_begin, double s_end) {
     const PathSample& p = pl.At(s);
     const double lateral = pl.Edge(p, side) + 0.45;
     const Vec3 base = p.road + p.right * (sign * lateral) + up * pl.options.curb_height;
-    if (!pl.path.InZone(base, Zone::kRoad, 0.2, 0, 0, kMaxLampHeight)) {
+    if (!pl.path.InZone(base, Zone::kRoad, 0.2, kMaxLampHeight)) {
       pl.builder->BeginChunk();
       if (pl.Chance(0.7)) {  // street lamp with an arm over the road
         const double h = pl.U(kMinLampHeight, kMaxLampHeight);

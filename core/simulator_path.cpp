@@ -116,8 +116,17 @@ std::pair<int, int> StreetPath::Cell(const Eigen::Vector3d& q) const {
           static_cast<int>(std::floor(q.dot(axis_b_) / cell_size_))};
 }
 
-bool StreetPath::InZone(const Eigen::Vector3d& q, Zone zone, double margin, int ignore_begin, int ignore_end,
-                        double object_height) const {
+bool StreetPath::InZone(const Eigen::Vector3d& q, Zone zone, double margin, double object_height) const {
+  return AnySampleZoneContains(q, zone, margin, /*ignore_begin=*/0, /*ignore_end=*/0, object_height);
+}
+
+bool StreetPath::InZoneOfOtherSamples(const Eigen::Vector3d& q, Zone zone, double margin, int ignore_begin,
+                                      int ignore_end) const {
+  return AnySampleZoneContains(q, zone, margin, ignore_begin, ignore_end, /*object_height=*/0.0);
+}
+
+bool StreetPath::AnySampleZoneContains(const Eigen::Vector3d& q, Zone zone, double margin, int ignore_begin,
+                                       int ignore_end, double object_height) const {
   const auto cell = Cell(q);
   for (int da = -1; da <= 1; ++da)
     for (int db = -1; db <= 1; ++db) {

@@ -73,15 +73,20 @@ class StreetPath {
   static constexpr double kLevelClearance = 4.0;
 
   // True when the horizontal position of q lies in `zone` of any sample
-  // (grown by margin metres), optionally ignoring samples with index in
-  // [ignore_begin, ignore_end). Merged samples count only for Zone::kLane.
+  // (grown by margin metres). Merged samples count only for Zone::kLane.
   // The object stands from q up to q + object_height: on a hill the same
   // street climbs past a tall building, so a sample counts whenever its road
   // comes within kLevelClearance of that vertical extent, not only of q.
-  bool InZone(const Eigen::Vector3d& q, Zone zone, double margin, int ignore_begin = 0, int ignore_end = 0,
-              double object_height = 0.0) const;
+  bool InZone(const Eigen::Vector3d& q, Zone zone, double margin, double object_height = 0.0) const;
+  // InZone for a point on the street itself (no height), not counting the
+  // samples with index in [ignore_begin, ignore_end): the street's own
+  // neighbourhood, when asking whether another street crosses there.
+  bool InZoneOfOtherSamples(const Eigen::Vector3d& q, Zone zone, double margin, int ignore_begin,
+                            int ignore_end) const;
 
  private:
+  bool AnySampleZoneContains(const Eigen::Vector3d& q, Zone zone, double margin, int ignore_begin, int ignore_end,
+                             double object_height) const;
   std::pair<int, int> Cell(const Eigen::Vector3d& q) const;
   Eigen::Vector3d down_, axis_a_, axis_b_;  // down + horizontal basis
   double spacing_;

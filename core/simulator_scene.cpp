@@ -253,7 +253,8 @@ double FreeExtent(const StreetPath& path, int j, double side, double from, doubl
   const int n = static_cast<int>(path.samples().size());
   double reach = from;
   for (double l = from + step; l <= limit + 1e-9; l += step) {
-    if (path.InZone(p.road + p.right * (side * l), zone, 0.3, std::max(0, j - 2), std::min(n, j + 3))) break;
+    const Eigen::Vector3d q = p.road + p.right * (side * l);
+    if (path.InZoneOfOtherSamples(q, zone, 0.3, std::max(0, j - 2), std::min(n, j + 3))) break;
     reach = l;
   }
   return reach;
@@ -280,7 +281,8 @@ void BuildStreetSurfaces(const StreetPath& path, const SceneOptions& options, Sc
       const int lo = std::max(0, j - 2), hi = std::min(n, j + 3);
       const Eigen::Vector3d outer = samples[j].road + samples[j].right * (sign * (edge + walk));
       const Eigen::Vector3d inner = samples[j].road + samples[j].right * (sign * (edge + 0.3));
-      junction[side][j] = path.InZone(outer, Zone::kRoad, 0.3, lo, hi) || path.InZone(inner, Zone::kRoad, 0.3, lo, hi);
+      junction[side][j] = path.InZoneOfOtherSamples(outer, Zone::kRoad, 0.3, lo, hi) ||
+                           path.InZoneOfOtherSamples(inner, Zone::kRoad, 0.3, lo, hi);
       verge[side][j] = FreeExtent(path, j, sign, edge + walk, 40.0, 2.0, Zone::kStreet);
       under[side][j] = std::max(verge[side][j], FreeExtent(path, j, sign, edge, 70.0, 4.0, Zone::kRoad));
     }

@@ -6,6 +6,7 @@
 
 #include "core/error.h"
 #include "stacknet/device.h"
+#include "stacknet/export.h"
 
 namespace dvso::stacknet {
 
@@ -30,12 +31,7 @@ LatencyStats MeasureLatency(const std::string& model_path, const LatencyOptions&
   const torch::Device device = SelectDevice(options.device, options.num_threads);
   const bool cuda = device.is_cuda();
   Require(cuda || options.dtype == "fp32", "fp16/bf16 latency is measured on CUDA only");
-  torch::jit::Module module;
-  try {
-    module = torch::jit::load(model_path, device);
-  } catch (const c10::Error& e) {
-    throw Error(model_path, std::string("cannot load TorchScript model: ") + e.what_without_backtrace());
-  }
+  torch::jit::Module module = LoadTorchScript(model_path, device);
   module.eval();
   const torch::ScalarType type = options.dtype == "fp16"   ? torch::kHalf
                                  : options.dtype == "bf16" ? torch::kBFloat16
