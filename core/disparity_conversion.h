@@ -38,7 +38,7 @@ struct ModelMetadata {
   // Paper "tb": a virtual baseline found by `dvso tune-baseline` (grid search
   // on a sequence with ground truth, expressed for the training camera); 0 = none.
   double tuned_baseline = 0;
-  std::string tuned_on;           // the sequence it was tuned on
+  std::string tuned_on;           // the sequence(s) it was tuned on
 
   bool has_camera() const { return baseline > 0 && fx_over_width > 0; }
   std::string ToJson() const;

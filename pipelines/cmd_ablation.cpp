@@ -26,7 +26,8 @@ void Run(const AblationArgs& args) {
   const double default_bv = setup.predictions.untuned_virtual_baseline;
   const std::string& out = args.experiment.out;
   std::ostream& log = args.experiment.json ? std::cerr : std::cout;
-  log << "dvso ablation: " << args.experiment.sequence << ", predictions: " << setup.predictions.description
+  const ExperimentSequence& sequence = setup.sequences.front();
+  log << "dvso ablation: " << sequence.path << ", predictions: " << setup.predictions.description
       << ", schedule: " << setup.options.dvso.prediction_timing << "\n";
 
   double tuned = args.tuned_baseline;
@@ -36,7 +37,9 @@ void Run(const AblationArgs& args) {
     tuned_how = "the model's, tuned on " + setup.predictions.metadata.tuned_on;
   }
   if (!(tuned > 0)) {
-    TuneVirtualBaseline(setup, BaselineGrid(args.tune_values, default_bv), args.experiment.count, JoinPath(out, "tune"), &tuned, !args.experiment.json);
+    tuned = TuneVirtualBaseline(setup, BaselineGrid(args.tune_values, default_bv), args.experiment.count,
+                                JoinPath(out, "tune"), !args.experiment.json)
+                .best;
     tuned_how = "grid search on this sequence";
   }
   log << "virtual baseline: default " << default_bv << " m, tuned " << tuned << " m (" << tuned_how << ")\n";
@@ -58,13 +61,13 @@ void Run(const AblationArgs& args) {
     options.dvso.left_right_check = v.lr;
     options.dvso.virtual_baseline = v.tb ? tuned : default_bv;
     log << "running " << v.name << " ..." << std::endl;
-    results.push_back(RunVariant(v.name, *setup.sequence, setup.gt, v.mode, options,
+    results.push_back(RunVariant(v.name, *sequence.reader, sequence.gt, v.mode, options,
                                  v.mode == vo::OdometryMode::kDvso ? setup.predictions.source.get() : nullptr,
                                  args.experiment.count, JoinPath(out, v.name)));
   }
   if (args.experiment.json) {
     nlohmann::json j;
-    j["sequence"] = args.experiment.sequence;
+    j["sequence"] = sequence.path;
     j["predictions"] = setup.predictions.description;
     j["prediction_timing"] = setup.options.dvso.prediction_timing;
     j["virtual_baseline_default"] = default_bv;
@@ -82,7 +85,7 @@ void Run(const AblationArgs& args) {
 void AddAblationCommand(CLI::App& app) {
   auto args = std::make_shared<AblationArgs>();
   auto* cmd = app.add_subcommand("ablation", "DVSO ablation (paper Table 3) on one sequence with ground truth");
-  AddExperimentOptions(cmd, &args->experiment);
+  AddExperimentOptions(cmd, &args->experiment, /*many_sequences=*/false);
   cmd->add_option("--tuned-baseline", args->tuned_baseline,
                   "b_v for the tb rows (metres); default: grid search on this sequence");
   cmd->add_option("--tune-values", args->tune_values, "Grid for that search, start:step:end (default: +-20 %)");

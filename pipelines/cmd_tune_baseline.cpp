@@ -1,6 +1,8 @@
 // `dvso tune-baseline`: the paper's grid search of the virtual stereo baseline
-// ("tb") on a sequence with ground truth: full DVSO per value, the value with
-// the lowest unaligned t_rel wins.
+// ("tb") on one or more sequences with ground truth (the paper tunes on its
+// training sequences): full DVSO per value and sequence, the value with the
+// lowest mean unaligned t_rel wins.
+#include <cmath>
 #include <iostream>
 
 #include "core/error.h"
@@ -16,42 +18,63 @@ void AddTuneBaselineCommand(CLI::App& app) {
     std::string write_model;
   };
   auto args = std::make_shared<Args>();
-  auto* cmd = app.add_subcommand("tune-baseline", "Grid search of the DVSO virtual baseline b_v on a sequence with GT");
-  AddExperimentOptions(cmd, &args->experiment);
+  auto* cmd = app.add_subcommand(
+      "tune-baseline",
+      "Grid search of the DVSO virtual baseline b_v on one or more sequences with GT (lowest mean t_rel wins)");
+  AddExperimentOptions(cmd, &args->experiment, /*many_sequences=*/true);
   cmd->add_option("--values", args->values, "start:step:end in metres (default: +-20 % around the model's b_v)");
   cmd->add_option("--write-model", args->write_model,
                   "Write a copy of the --model carrying the best b_v (paper 'tb'); dvso odometry then uses it");
   cmd->callback([args] {
-    Require(args->write_model.empty() || !args->experiment.predictions.model.empty(),
-            "--write-model needs --model");
-    const ExperimentSetup setup = OpenExperiment(args->experiment);
+    const ExperimentArgs& experiment = args->experiment;
+    Require(args->write_model.empty() || !experiment.predictions.model.empty(), "--write-model needs --model");
+    const ExperimentSetup setup = OpenExperiment(experiment);
     const double default_bv = setup.predictions.untuned_virtual_baseline;
-    const std::vector<double> grid = BaselineGrid(args->values, default_bv);
-    double best = 0;
-    const std::vector<VariantResult> results =
-        TuneVirtualBaseline(setup, grid, args->experiment.count, args->experiment.out, &best, !args->experiment.json);
+    const BaselineSearch search = TuneVirtualBaseline(setup, BaselineGrid(args->values, default_bv), experiment.count,
+                                                      experiment.out, !experiment.json);
+    const size_t n = setup.sequences.size();
     if (!args->write_model.empty()) {
       ModelMetadata metadata = setup.predictions.metadata;
-      const PinholeCamera& cam = setup.sequence->camera().left;
-      metadata.tuned_baseline = TrainingCameraBaseline(metadata, best, cam.fx, cam.width);
-      metadata.tuned_on = args->experiment.sequence + (args->experiment.count > 0
-                                                           ? " (first " + std::to_string(args->experiment.count) + " frames)"
-                                                           : std::string());
-      WriteModelWithTunedBaseline(args->experiment.predictions.model, args->write_model, metadata);
-      (args->experiment.json ? std::cerr : std::cout) << "wrote " << args->write_model << " (tuned baseline "
-                                                      << metadata.tuned_baseline << " m for the training camera)\n";
+      const PinholeCamera& cam = setup.first().camera().left;
+      metadata.tuned_baseline = TrainingCameraBaseline(metadata, search.best, cam.fx, cam.width);
+      std::string tuned_on;
+      for (const ExperimentSequence& s : setup.sequences) tuned_on += (tuned_on.empty() ? "" : ", ") + s.path;
+      if (experiment.count > 0) tuned_on += " (first " + std::to_string(experiment.count) + " frames of each)";
+      metadata.tuned_on = tuned_on;
+      WriteModelWithTunedBaseline(experiment.predictions.model, args->write_model, metadata);
+      (experiment.json ? std::cerr : std::cout) << "wrote " << args->write_model << " (tuned baseline "
+                                                << metadata.tuned_baseline << " m for the training camera)\n";
     }
-    if (args->experiment.json) {
+    if (experiment.json) {
       nlohmann::json j;
       j["default_virtual_baseline"] = default_bv;
-      j["best_virtual_baseline"] = best;
+      j["best_virtual_baseline"] = search.best;
       j["prediction_timing"] = setup.options.dvso.prediction_timing;
-      for (const VariantResult& r : results) j["runs"].push_back(r.ToJson());
+      for (const ExperimentSequence& s : setup.sequences) j["sequences"].push_back(s.path);
+      for (size_t i = 0; i < search.runs.size(); ++i) {
+        nlohmann::json run = search.runs[i].ToJson();
+        run["sequence"] = setup.sequences[i % n].path;
+        j["runs"].push_back(run);
+      }
+      for (size_t v = 0; v < search.values.size(); ++v) {
+        const double e = search.mean_error[v];
+        j["mean_error"].push_back({{"virtual_baseline", search.values[v]},
+                                   {"mean_error", std::isfinite(e) ? nlohmann::json(e) : nlohmann::json(nullptr)}});
+      }
       std::cout << j.dump(2) << std::endl;
     } else {
-      std::cout << "schedule: " << setup.options.dvso.prediction_timing << "\n"
-                << FormatVariantTable(results) << "best virtual baseline: " << best << " m (default " << default_bv
-                << " m); use it with --virtual-baseline " << best << "\n";
+      std::cout << "schedule: " << setup.options.dvso.prediction_timing << "\n";
+      for (size_t k = 0; k < n && n > 1; ++k) std::cout << "#" << k + 1 << ": " << setup.sequences[k].path << "\n";
+      std::cout << FormatVariantTable(search.runs);
+      if (n > 1) {
+        for (size_t v = 0; v < search.values.size(); ++v) {
+          std::cout << "b_v=" << search.values[v] << ": mean over " << n << " sequences "
+                    << (std::isfinite(search.mean_error[v]) ? std::to_string(search.mean_error[v]) : "- (lost)")
+                    << "\n";
+        }
+      }
+      std::cout << "best virtual baseline: " << search.best << " m (default " << default_bv
+                << " m); use it with --virtual-baseline " << search.best << "\n";
     }
   });
 }

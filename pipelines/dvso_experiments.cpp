@@ -1,5 +1,6 @@
 #include "pipelines/dvso_experiments.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <iomanip>
@@ -49,14 +50,20 @@ VariantResult RunVariant(const std::string& name, const SequenceReader& sequence
   return r;
 }
 
-void AddExperimentOptions(CLI::App* cmd, ExperimentArgs* args) {
-  cmd->add_option("--sequence", args->sequence, "Sequence (KITTI layout, EuRoC, or image folder + --camera)")
-      ->required();
-  cmd->add_option("--gt", args->gt, "Ground-truth poses, one KITTI line per sequence frame")
-      ->required()
-      ->check(CLI::ExistingFile);
+void AddExperimentOptions(CLI::App* cmd, ExperimentArgs* args, bool many_sequences) {
+  const std::string repeat = many_sequences ? " (repeatable: one --gt per --sequence, in order)" : "";
+  auto* sequence = cmd->add_option("--sequence", args->sequences,
+                                   "Sequence (KITTI layout, EuRoC, or image folder + --camera)" + repeat)
+                       ->required();
+  auto* gt = cmd->add_option("--gt", args->gts, "Ground-truth poses, one KITTI line per sequence frame" + repeat)
+                 ->required()
+                 ->check(CLI::ExistingFile);
+  if (!many_sequences) {
+    sequence->expected(1);
+    gt->expected(1);
+  }
   cmd->add_option("--out", args->out, "Folder for the runs' outputs (one subfolder per run)")->required();
-  cmd->add_option("--count", args->count, "Frames from the start (-1 = all)");
+  cmd->add_option("--count", args->count, "Frames from the start of each sequence (-1 = all)");
   cmd->add_option("--config", args->config, "Odometry YAML options (strict keys)");
   cmd->add_option("--preset", args->preset, "default | fast")->check(CLI::IsMember({"default", "fast"}));
   cmd->add_option("--camera", args->camera_file, "DSO camera file (image-folder sequences only)");
@@ -67,43 +74,74 @@ void AddExperimentOptions(CLI::App* cmd, ExperimentArgs* args) {
 }
 
 ExperimentSetup OpenExperiment(const ExperimentArgs& args) {
+  Require(!args.sequences.empty() && args.sequences.size() == args.gts.size(),
+          "give one --gt per --sequence (" + std::to_string(args.sequences.size()) + " sequences, " +
+              std::to_string(args.gts.size()) + " --gt)");
+  Require(args.sequences.size() == 1 || args.predictions.disparity_left.empty(),
+          "disparity files belong to one sequence: several --sequence need --model (or the shipped model)");
   ExperimentSetup setup;
   setup.options = vo::OdometryOptions::Preset(args.preset);
   // Under the config file and the flag, so either still decides.
   setup.options.dvso.prediction_timing = kExperimentPredictionTiming;
   if (!args.config.empty()) setup.options = vo::LoadOdometryOptions(args.config, setup.options);
-  setup.sequence = OpenSequence(args.sequence, args.camera_file, ParseCameraPair(args.cameras));
-  setup.gt = ReadTrajectory(args.gt, TrajectoryFormat::kKitti);
-  const int frames = args.count < 0 ? setup.sequence->size() : std::min(args.count, setup.sequence->size());
-  RequireFile(static_cast<int>(setup.gt.size()) >= frames, args.gt,
-              "has " + std::to_string(setup.gt.size()) + " poses for " + std::to_string(frames) + " frames");
-  setup.predictions = OpenPredictionSource(args.predictions, *setup.sequence);
+  for (size_t i = 0; i < args.sequences.size(); ++i) {
+    ExperimentSequence s;
+    s.path = args.sequences[i];
+    s.reader = OpenSequence(s.path, args.camera_file, ParseCameraPair(args.cameras));
+    s.gt = ReadTrajectory(args.gts[i], TrajectoryFormat::kKitti);
+    const int frames = args.count < 0 ? s.reader->size() : std::min(args.count, s.reader->size());
+    RequireFile(static_cast<int>(s.gt.size()) >= frames, args.gts[i],
+                "has " + std::to_string(s.gt.size()) + " poses for " + std::to_string(frames) + " frames");
+    if (!setup.sequences.empty()) {
+      // b_v is in metres of this camera's geometry (d = D / (f_x b_v), D scaled with the width).
+      const PinholeCamera& a = setup.first().camera().left;
+      const PinholeCamera& b = s.reader->camera().left;
+      RequireFile(std::abs(a.fx - b.fx) < 1e-6 * a.fx && a.width == b.width, s.path,
+                  "has another camera (f_x, width) than " + setup.sequences.front().path +
+                      ": one b_v grid needs one camera");
+    }
+    setup.sequences.push_back(std::move(s));
+  }
+  setup.predictions = OpenPredictionSource(args.predictions, setup.first());
   ApplyPredictionSource(args.predictions, setup.predictions, &setup.options);
   return setup;
 }
 
-std::vector<VariantResult> TuneVirtualBaseline(const ExperimentSetup& setup, const std::vector<double>& values,
-                                               int count, const std::string& out_dir, double* best, bool progress) {
-  std::vector<VariantResult> results;
+BaselineSearch TuneVirtualBaseline(const ExperimentSetup& setup, const std::vector<double>& values, int count,
+                                   const std::string& out_dir, bool progress) {
+  BaselineSearch search;
+  search.values = values;
+  const size_t n = setup.sequences.size();
   std::unique_ptr<ProgressBar> bar;
-  if (progress) bar = std::make_unique<ProgressBar>("tune-baseline", static_cast<long>(values.size()));
-  double best_t_rel = std::numeric_limits<double>::infinity();
+  if (progress) bar = std::make_unique<ProgressBar>("tune-baseline", static_cast<long>(values.size() * n));
+  double best_error = std::numeric_limits<double>::infinity();
   for (const double b : values) {
     vo::OdometryOptions options = setup.options;
     options.dvso.virtual_baseline = b;
     std::ostringstream name;
     name << std::fixed << std::setprecision(3) << b;
-    results.push_back(RunVariant("b_v=" + name.str(), *setup.sequence, setup.gt, vo::OdometryMode::kDvso, options,
-                                 setup.predictions.source.get(), count, JoinPath(out_dir, "bv_" + name.str())));
-    if (results.back().lost == 0 && results.back().TuningError() < best_t_rel) {
-      best_t_rel = results.back().TuningError();
-      *best = b;
+    double sum = 0;
+    bool lost = false;
+    for (size_t k = 0; k < n; ++k) {
+      const ExperimentSequence& s = setup.sequences[k];
+      const std::string run_name = "b_v=" + name.str() + (n > 1 ? " #" + std::to_string(k + 1) : "");
+      const std::string dir = JoinPath(out_dir, "bv_" + name.str() + (n > 1 ? "_" + std::to_string(k + 1) : ""));
+      search.runs.push_back(RunVariant(run_name, *s.reader, s.gt, vo::OdometryMode::kDvso, options,
+                                       setup.predictions.source.get(), count, dir));
+      sum += search.runs.back().TuningError();
+      lost = lost || search.runs.back().lost > 0;
+      if (bar) bar->Update(static_cast<long>(search.runs.size()), run_name);
     }
-    if (bar) bar->Update(static_cast<long>(results.size()), results.back().name);
+    // A value that loses tracking anywhere is not a candidate.
+    search.mean_error.push_back(lost ? std::numeric_limits<double>::infinity() : sum / static_cast<double>(n));
+    if (search.mean_error.back() < best_error) {
+      best_error = search.mean_error.back();
+      search.best = b;
+    }
   }
   if (bar) bar->Finish();
-  Require(std::isfinite(best_t_rel), "tune-baseline: every run lost tracking");
-  return results;
+  Require(std::isfinite(best_error), "tune-baseline: every value lost tracking on some sequence");
+  return search;
 }
 
 std::vector<double> ParseRange(const std::string& text) {

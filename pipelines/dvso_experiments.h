@@ -7,6 +7,7 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "core/disparity_source.h"
 #include "core/sequence.h"
@@ -47,27 +48,42 @@ inline constexpr const char* kExperimentPredictionTiming = "keyframe-blocking";
 
 // Options both experiment commands take.
 struct ExperimentArgs {
-  std::string sequence, gt, out, config, preset = "default", camera_file, cameras = "grey";
+  std::vector<std::string> sequences, gts;  // --sequence / --gt pairs, in order; `ablation` takes one
+  std::string out, config, preset = "default", camera_file, cameras = "grey";
   int count = -1;
   bool json = false;
   PredictionSourceArgs predictions;
 };
-void AddExperimentOptions(CLI::App* cmd, ExperimentArgs* args);
+// many_sequences: --sequence/--gt may be repeated (tune-baseline: the paper tunes b_v on
+// its training sequences, not on one).
+void AddExperimentOptions(CLI::App* cmd, ExperimentArgs* args, bool many_sequences);
 
-// What the experiments share once opened: sequence, GT, base options, predictions.
+struct ExperimentSequence {
+  std::string path;
+  std::unique_ptr<SequenceReader> reader;
+  Trajectory gt;  // at least one pose per evaluated frame
+};
+
+// What the experiments share once opened: sequences with GT, base options, predictions.
 struct ExperimentSetup {
-  std::unique_ptr<SequenceReader> sequence;
-  Trajectory gt;
+  std::vector<ExperimentSequence> sequences;  // >= 1; several share one camera (f_x and width), so one b_v fits all
   vo::OdometryOptions options;   // preset + config; dvso.virtual_baseline = the default b_v
-  PredictionSource predictions;
+  PredictionSource predictions;  // opened for the first sequence
+  const SequenceReader& first() const { return *sequences.front().reader; }
 };
 ExperimentSetup OpenExperiment(const ExperimentArgs& args);
 
 // Grid search of the virtual baseline (paper "tb"): full DVSO (in+vs+lr) per
-// value; returns the results in order and sets *best to the value with the
-// lowest unaligned t_rel (ATE on paths shorter than 100 m), among runs that never lost tracking.
-std::vector<VariantResult> TuneVirtualBaseline(const ExperimentSetup& setup, const std::vector<double>& values,
-                                               int count, const std::string& out_dir, double* best, bool progress);
+// value on every sequence of the setup.
+struct BaselineSearch {
+  std::vector<VariantResult> runs;  // value-major: runs[v * sequences + s]
+  std::vector<double> values;
+  std::vector<double> mean_error;   // per value: mean TuningError over the sequences (inf if any run lost tracking)
+  double best = 0;                  // the value with the lowest mean_error
+};
+// Out_dir gets one folder per run (bv_<value>, or bv_<value>_<k> with several sequences).
+BaselineSearch TuneVirtualBaseline(const ExperimentSetup& setup, const std::vector<double>& values, int count,
+                                   const std::string& out_dir, bool progress);
 
 // "start:step:end" (inclusive) -> values; throws dvso::Error on bad text.
 std::vector<double> ParseRange(const std::string& text);

@@ -372,6 +372,20 @@ TEST(DvsoCli, AblationAndTuneBaselinePrintEveryRow) {
                                                 /*merge_stderr=*/false);
   ASSERT_EQ(from_flag.exit_code, 0) << from_flag.out;
   EXPECT_EQ(nlohmann::json::parse(from_flag.out)["prediction_timing"], "speculative");
+
+  // Several sequences (the paper tunes b_v on its training set): every value runs on each, the lowest mean
+  // error wins. The same sequence twice, the second cut shorter, so the two runs differ.
+  const std::string two = " --json --values 0.45:0.09:0.63 --preset fast --disparity-left " + seq +
+                          "/disp_0 --disparity-right " + seq + "/disp_1 --sequence " + seq + " --gt " + seq +
+                          "/poses.txt --sequence " + seq + " --gt " + seq + "/poses.txt";
+  const auto files_two = dvso::testing::RunDvso("tune-baseline --out " + dir + "/two" + two);
+  EXPECT_NE(files_two.exit_code, 0);  // disparity files belong to one sequence
+  EXPECT_NE(files_two.out.find("several --sequence"), std::string::npos) << files_two.out;
+  const auto unpaired = dvso::testing::RunDvso("tune-baseline --out " + dir + "/unpaired" + common + " --sequence " + seq);
+  EXPECT_NE(unpaired.exit_code, 0);
+  EXPECT_NE(unpaired.out.find("one --gt per --sequence"), std::string::npos) << unpaired.out;
+  EXPECT_NE(dvso::testing::RunDvso("ablation --out " + dir + "/abl2" + common + " --sequence " + seq + " --gt " + seq +
+                                   "/poses.txt").exit_code, 0);  // the ablation table is per sequence
 }
 
 }  // namespace
