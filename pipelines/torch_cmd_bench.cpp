@@ -1,5 +1,6 @@
-// `dvso bench --model model.pt [--device cpu|cuda] [--height 256 --width 512]
-// [--batch 1] [--dtype fp32|fp16|bf16|all] [--json]`: inference latency.
+// `dvso bench --model model.pt [--device cpu|cuda] [--height H --width W]
+// [--batch 1] [--dtype fp32|fp16|bf16|all] [--json]`: inference latency, by
+// default at the input size the model was trained for (its metadata).
 #include <iomanip>
 #include <iostream>
 #include <nlohmann/json.hpp>
@@ -7,6 +8,7 @@
 
 #include "core/error.h"
 #include "pipelines/commands.h"
+#include "stacknet/export.h"
 #include "stacknet/latency.h"
 
 namespace dvso::cli {
@@ -19,11 +21,12 @@ void AddBenchCommand(CLI::App& app) {
     bool json = false;
   };
   auto args = std::make_shared<Args>();
+  args->options.height = args->options.width = 0;  // 0 = the model's input size
   auto* cmd = app.add_subcommand("bench", "Inference latency of a TorchScript model (median / p90)");
   cmd->add_option("--model", args->model, "TorchScript model from `dvso export`")->required()->check(CLI::ExistingFile);
   cmd->add_option("--device", args->options.device, "auto, cpu or cuda");
-  cmd->add_option("--height", args->options.height, "Input height");
-  cmd->add_option("--width", args->options.width, "Input width");
+  cmd->add_option("--height", args->options.height, "Input height (default: the model's input size)");
+  cmd->add_option("--width", args->options.width, "Input width (default: the model's input size)");
   cmd->add_option("--batch", args->options.batch, "Batch size");
   cmd->add_option("--dtype", args->dtype, "fp32, fp16, bf16 or all (= fp32, plus fp16 and bf16 on CUDA)");
   cmd->add_option("--warmup", args->options.warmup, "Untimed warm-up runs");
@@ -32,6 +35,13 @@ void AddBenchCommand(CLI::App& app) {
   cmd->add_option("--threads", args->options.num_threads, "CPU threads (0 = hardware cores)");
   cmd->add_flag("--json", args->json, "Print one JSON object");
   cmd->callback([args] {
+    if (args->options.height <= 0 || args->options.width <= 0) {
+      // What the model sees in `predict` and DVSO; files without the size: the paper's 512x256.
+      const ModelMetadata metadata = stacknet::ReadModelMetadata(args->model);
+      const bool known = metadata.input_width > 0 && metadata.input_height > 0;
+      if (args->options.width <= 0) args->options.width = known ? metadata.input_width : 512;
+      if (args->options.height <= 0) args->options.height = known ? metadata.input_height : 256;
+    }
     std::vector<std::string> dtypes{args->dtype};
     if (args->dtype == "all") {
       dtypes = {"fp32"};

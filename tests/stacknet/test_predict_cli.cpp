@@ -58,6 +58,22 @@ TEST_F(PredictCli, ImagesKeepTheirNames) {
   EXPECT_EQ(left.rows, 32);
 }
 
+// `dvso bench` measures at the model's own input size unless told otherwise (the tiny config: 64x32).
+TEST_F(PredictCli, BenchDefaultsToTheModelsInputSize) {
+  const std::string out = (dir_ / "bench.json").string();
+  const std::string bench = std::string(DVSO_BINARY) + " bench --device cpu --threads 1 --warmup 1 --runs 3 --json --model " +
+                            model_;
+  ASSERT_EQ(std::system((bench + " > " + out + " 2>/dev/null").c_str()), 0);
+  std::ifstream in(out);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("\"width\": 64"), std::string::npos) << text;
+  EXPECT_NE(text.find("\"height\": 32"), std::string::npos) << text;
+  ASSERT_EQ(std::system((bench + " --width 128 --height 64 > " + out + " 2>/dev/null").c_str()), 0);
+  std::ifstream again(out);
+  const std::string given((std::istreambuf_iterator<char>(again)), std::istreambuf_iterator<char>());
+  EXPECT_NE(given.find("\"width\": 128"), std::string::npos) << given;
+}
+
 TEST_F(PredictCli, TwoImagesWithTheSameNameAreAnError) {
   WriteImage("a.png", 64, 32);
   WriteImage("a.jpg", 64, 32);
