@@ -17,7 +17,7 @@
 # Environment:
 #   DVSO=build/dvso                      binary (build with scripts/build.sh)
 #   WORLDS=v4                            training worlds: v4 = 72 of 30 frames, v3 = 36 of 60 frames
-#   CONFIG=configs/stacknet_cpu_v4_long.yaml  (the shipped model's; v3: configs/stacknet_cpu_main.yaml)
+#   CONFIG=configs/stacknet_cpu_v4_long.yaml  (the shipped model's base run; v3: configs/stacknet_cpu_main.yaml)
 #                                        data paths must point into $DATA
 #   DATA=/tmp/dvso_stacknet_$WORLDS      rendered sequences and labels (~6 GB)
 #   RUN=$DATA/run_main                   checkpoints, logs, exported models, predictions
@@ -34,7 +34,9 @@ cd "${REPO:-$(dirname "$0")/..}"
 STEP=${1:-all}
 DVSO=${DVSO:-build/dvso}
 WORLDS=${WORLDS:-v4}
-SHIPPED_CONFIG=configs/stacknet_cpu_v4_long.yaml  # trained models/stacknet_cpu_main.pt (session 9)
+# The shipped models/stacknet_cpu_main.pt (session 13) is this config's run (session 9) fine-tuned at 640x192 by
+# configs/stacknet_cpu_v4_finetune_640.yaml (a second `train` with CONFIG= that file and init_from = this run's export).
+SHIPPED_CONFIG=configs/stacknet_cpu_v4_long.yaml
 CONFIG=${CONFIG:-$([[ $WORLDS == v4 ]] && echo "$SHIPPED_CONFIG" || echo configs/stacknet_cpu_main.yaml)}
 DATA=${DATA:-/tmp/dvso_stacknet_$WORLDS}
 RUN=${RUN:-$DATA/run_main}
