@@ -36,11 +36,12 @@ void AddBenchCommand(CLI::App& app) {
   cmd->add_flag("--json", args->json, "Print one JSON object");
   cmd->callback([args] {
     if (args->options.height <= 0 || args->options.width <= 0) {
-      // What the model sees in `predict` and DVSO; files without the size: the paper's 512x256.
+      // What the model sees in `predict` and DVSO; files without the size: LatencyOptions' default (the paper's).
       const ModelMetadata metadata = stacknet::ReadModelMetadata(args->model);
       const bool known = metadata.input_width > 0 && metadata.input_height > 0;
-      if (args->options.width <= 0) args->options.width = known ? metadata.input_width : 512;
-      if (args->options.height <= 0) args->options.height = known ? metadata.input_height : 256;
+      const stacknet::LatencyOptions fallback;
+      if (args->options.width <= 0) args->options.width = known ? metadata.input_width : fallback.width;
+      if (args->options.height <= 0) args->options.height = known ? metadata.input_height : fallback.height;
     }
     std::vector<std::string> dtypes{args->dtype};
     if (args->dtype == "all") {
