@@ -1,5 +1,5 @@
 // Device choice: CUDA when present (or asked for), else CPU with the intra-op
-// thread count set to the hardware cores.
+// thread count (LibTorch and OpenBLAS) set to the hardware cores.
 #pragma once
 
 #include <torch/torch.h>
@@ -8,7 +8,8 @@
 
 namespace dvso::stacknet {
 
-// name: "auto" | "cpu" | "cuda". num_threads: 0 = hardware cores. Throws
+// name: "auto" | "cpu" | "cuda". num_threads: 0 = hardware cores; it is also the
+// OpenBLAS pool size when that library is loaded. Throws
 // dvso::Error when CUDA is requested but unavailable.
 torch::Device SelectDevice(const std::string& name, int num_threads = 0);
 
