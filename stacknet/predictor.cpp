@@ -24,6 +24,7 @@ TorchDisparityPredictor::TorchDisparityPredictor(const std::string& model_path, 
   torch::jit::ExtraFilesMap extra{{kModelMetadataFile, ""}};
   module_ = LoadTorchScript(model_path, device_, &extra);
   module_.eval();
+  UseInferenceLayout(module_, device_);
   RequireFile(module_.hasattr("input_width") && module_.hasattr("input_height"), model_path,
               "not a dvso export (no input_width/input_height attributes)");
   input_width_ = static_cast<int>(module_.attr("input_width").toInt());
@@ -43,7 +44,7 @@ DisparityPair TorchDisparityPredictor::PredictImage(const cv::Mat& image) {
   torch::Tensor input =
       torch::from_blob(as_float.data, {1, input_height_, input_width_, 3}, torch::kFloat32).permute({0, 3, 1, 2});
   if (options_.post_process) input = torch::cat({input, input.flip({3})}, 0);
-  input = input.contiguous().to(device_);
+  input = ToInferenceLayout(input.contiguous().to(device_), device_);
   torch::NoGradGuard no_grad;
   c10::IValue output;
   try {

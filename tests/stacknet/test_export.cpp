@@ -60,6 +60,33 @@ TEST(Export, TracedModuleMatchesTheCppModuleAtTwoSizes) {
   fs::remove(path);
 }
 
+TEST(Export, InferenceLayoutGivesTheSameDisparities) {
+  torch::manual_seed(11);
+  StackNet net(testing::TinyNetwork());
+  {
+    torch::NoGradGuard no_grad;
+    for (auto& p : net->residual_net()->parameters()) p.add_(torch::randn_like(p) * 0.005);
+  }
+  net->eval();
+  torch::jit::Module module = TraceStackNet(net, /*use_residual=*/true, 32, 64);
+  const torch::Tensor image = torch::rand({1, 3, 64, 128});
+  torch::NoGradGuard no_grad;
+  const auto reference = module.forward({image}).toTuple();
+  const torch::Device cpu(torch::kCPU);
+  UseInferenceLayout(module, cpu);
+  size_t channels_last = 0;
+  for (const torch::Tensor& p : module.parameters()) {
+    if (p.dim() == 4) channels_last += p.is_contiguous(at::MemoryFormat::ChannelsLast) && !p.is_contiguous();
+  }
+  EXPECT_GT(channels_last, 0u);  // the layout did change (1x1 kernels are both)
+  const torch::Tensor input = ToInferenceLayout(image, cpu);
+  EXPECT_TRUE(input.is_contiguous(at::MemoryFormat::ChannelsLast));
+  const auto converted = module.forward({input}).toTuple();
+  for (int i = 0; i < 2; ++i) {
+    EXPECT_LT(MaxDifference(reference->elements()[i].toTensor(), converted->elements()[i].toTensor()), 1e-4);
+  }
+}
+
 TEST(Export, CheckpointExportUsesTheTrainedNetwork) {
   torch::manual_seed(4);
   StackNetConfig config;
