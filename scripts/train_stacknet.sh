@@ -8,12 +8,17 @@
 #   3. train the staged config (`dvso train`, configs/stacknet_cpu_v4_long.yaml), with a
 #      held-out abs rel after every epoch (learning curve);
 #   4. export SimpleNet (after its stages) and StackNet (final);
-#   5. evaluate both on the held-out frames (`dvso eval-depth`, 0-80 m) and write
+#   5. for the shipped chain, fine-tune that export at 640x192 ($FINETUNE_CONFIG, `train --init-from`)
+#      into $RUN/finetune and export again;
+#   6. tb: render four 1241x376 worlds along training trajectories (seeds never used for the network) and
+#      grid-search the virtual baseline with `dvso tune-baseline`, which stamps it into the final model
+#      ($FINAL_RUN/stacknet_tb.pt: the file to copy to models/stacknet_cpu_main.pt);
+#   7. evaluate both on the held-out frames (`dvso eval-depth`, 0-80 m) and write
 #      docs/stacknet_metrics.json, docs/stacknet_heldout.png (image / GT / SimpleNet /
 #      StackNet), docs/stacknet_learning_curve.{csv,png}; the real KITTI 2015 pair in data/ (abs rel, a
 #      domain-gap figure) and docs/stacknet_real.png.
 #
-#   scripts/train_stacknet.sh [all|data|train|monitor|export|eval]    (default: all)
+#   scripts/train_stacknet.sh [all|data|train|monitor|export|finetune|tb|eval]    (default: all)
 # Environment:
 #   DVSO=build/dvso                      binary (build with scripts/build.sh)
 #   WORLDS=v4                            training worlds: v4 = 72 of 30 frames, v3 = 36 of 60 frames
@@ -21,6 +26,9 @@
 #                                        data paths must point into $DATA
 #   DATA=/tmp/dvso_stacknet_$WORLDS      rendered sequences and labels (~6 GB)
 #   RUN=$DATA/run_main                   checkpoints, logs, exported models, predictions
+#   FINETUNE_CONFIG=configs/stacknet_cpu_v4_finetune_640.yaml  second training from the base run's export
+#                                        (default for the shipped config; "" = none: the base run is final)
+#   TB_VALUES=0.40:0.04:0.64             b_v grid of the tb step (metres)
 #   DOCS=docs                            where metrics and figures go (default: docs/ for the shipped
 #                                        model's config, $RUN/docs for any other)
 #   SNIPPETS=/work/shared/data/kitti_odometry_snippets  real KITTI frames (no depth GT) for a figure
@@ -35,11 +43,18 @@ STEP=${1:-all}
 DVSO=${DVSO:-build/dvso}
 WORLDS=${WORLDS:-v4}
 # The shipped models/stacknet_cpu_main.pt (session 13) is this config's run (session 9) fine-tuned at 640x192 by
-# configs/stacknet_cpu_v4_finetune_640.yaml (a second `train` with CONFIG= that file and init_from = this run's export).
+# configs/stacknet_cpu_v4_finetune_640.yaml (the finetune step), with b_v from the tb step.
 SHIPPED_CONFIG=configs/stacknet_cpu_v4_long.yaml
 CONFIG=${CONFIG:-$([[ $WORLDS == v4 ]] && echo "$SHIPPED_CONFIG" || echo configs/stacknet_cpu_main.yaml)}
 DATA=${DATA:-/tmp/dvso_stacknet_$WORLDS}
 RUN=${RUN:-$DATA/run_main}
+if [[ -z "${FINETUNE_CONFIG+set}" ]]; then
+  FINETUNE_CONFIG=$([[ $CONFIG == "$SHIPPED_CONFIG" ]] && echo configs/stacknet_cpu_v4_finetune_640.yaml || echo "")
+fi
+# The run whose models are evaluated, tuned and shipped.
+FINAL_RUN=$RUN
+[[ -n "$FINETUNE_CONFIG" ]] && FINAL_RUN=$RUN/finetune
+TB_VALUES=${TB_VALUES:-0.40:0.04:0.64}
 # Figures and metrics go into docs/ only for the shipped model's config; other runs keep theirs in $RUN/docs.
 DOCS=${DOCS:-$([[ $CONFIG == "$SHIPPED_CONFIG" ]] && echo docs || echo "$RUN/docs")}
 NICE=${NICE:-19}
@@ -90,6 +105,9 @@ EOF
   )
 fi
 TEST_SEGMENTS=("te08 08 1000 150 308" "te09 09 300 150 309" "te10 10 300 150 310")
+# tb worlds (paper: b_v tuned on training sequences): KITTI-size grey sequences along training trajectories,
+# seeds used neither for the network nor for the held-out worlds (docs/dvso.md, session 13).
+TB_WORLDS=("tb05 05 1000 300 9505" "tb00 00 3000 300 9701" "tb02 02 1500 300 9702" "tb07 07 600 300 9703")
 # Frames of each held-out segment used for the per-epoch curve (every 5th: 90 frames).
 CURVE_STEP=5
 
@@ -196,11 +214,13 @@ curve_monitor() {
   done
 }
 
+# Trains $CONFIG into $RUN (from the weights of $INIT_FROM when set), resuming an interrupted run.
 step_train() {
   mkdir -p "$RUN"
-  if [[ -f "$RUN/checkpoint_final.pt" ]]; then log "training already finished"; return 0; fi
+  if [[ -f "$RUN/checkpoint_final.pt" ]]; then log "training $RUN already finished"; return 0; fi
   local resume=()
   [[ -f "$RUN/checkpoint_last.pt" ]] && resume=(--resume)
+  [[ -n "${INIT_FROM:-}" ]] && resume+=(--init-from "$INIT_FROM")  # ignored by train when resuming
   rm -f "$RUN/train.done"  # marks the end of this training process (stops the curve monitor)
   log "train $CONFIG -> $RUN ${resume[*]:-}"
   curve_monitor >> "$RUN/curve_monitor.log" 2>&1 &
@@ -220,7 +240,40 @@ step_export() {
   [[ -f "$RUN/stacknet.pt" ]] || run "$DVSO" export --checkpoint "$RUN/checkpoint_final.pt" --model stack --out "$RUN/stacknet.pt"
 }
 
+# Second training from the base run's StackNet export (the shipped chain), then its export.
+step_finetune() {
+  if [[ -z "$FINETUNE_CONFIG" ]]; then log "no FINETUNE_CONFIG: the base run is final"; return 0; fi
+  [[ -f "$RUN/stacknet.pt" ]] || { echo "error: no $RUN/stacknet.pt to fine-tune (train and export first)" >&2; exit 1; }
+  local base_model=$RUN/stacknet.pt
+  RUN=$FINAL_RUN CONFIG=$FINETUNE_CONFIG INIT_FROM=$base_model step_train
+  RUN=$FINAL_RUN step_export
+}
+
+# tb: b_v grid search on the tb worlds; writes $FINAL_RUN/stacknet_tb.pt (the model with b_v in its metadata).
+step_tb() {
+  [[ -f "$FINAL_RUN/stacknet.pt" ]] || { echo "error: no $FINAL_RUN/stacknet.pt (export first)" >&2; exit 1; }
+  [[ -f "$FINAL_RUN/stacknet_tb.pt" ]] && { log "tb already done: $FINAL_RUN/stacknet_tb.pt"; return 0; }
+  local pairs=()
+  for spec in "${TB_WORLDS[@]}"; do
+    set -- $spec
+    local out="$DATA/$1"
+    if [[ ! -f "$out/simulation.yaml" ]]; then  # written after the last frame
+      log "simulate $1 (KITTI $2 from pose $3, $4 frames, seed $5, 1241x376 grey)"
+      run "$DVSO" simulate --out "$out" --trajectory "data/kitti_poses/$2.txt" --first "$3" --count "$4" --seed "$5" \
+        --appearance varied --quiet > "$DATA/$1.simulate.log"
+    fi
+    pairs+=(--sequence "$out" --gt "$out/poses.txt")
+  done
+  log "tune-baseline $TB_VALUES on ${#TB_WORLDS[@]} worlds"
+  rm -rf "$FINAL_RUN/tb"
+  run "$DVSO" tune-baseline --model "$FINAL_RUN/stacknet.pt" "${pairs[@]}" --values "$TB_VALUES" --out "$FINAL_RUN/tb" \
+    --write-model "$FINAL_RUN/stacknet_tb.pt.tmp" --json > "$FINAL_RUN/tune_baseline.json"
+  mv "$FINAL_RUN/stacknet_tb.pt.tmp" "$FINAL_RUN/stacknet_tb.pt"
+  log "tuned model: $FINAL_RUN/stacknet_tb.pt (ship: cp it to models/stacknet_cpu_main.pt)"
+}
+
 step_eval() {
+  local RUN=$FINAL_RUN  # evaluate the final models (the fine-tune's when there is one)
   mkdir -p "$DOCS"  # the only step that writes there
   local results=()
   for net in simplenet stacknet; do
@@ -255,7 +308,7 @@ step_eval() {
       done
     fi
   done
-  python3 - "$RUN" "$DOCS/stacknet_metrics.json" "$CONFIG" <<'EOF'
+  python3 - "$RUN" "$DOCS/stacknet_metrics.json" "$CONFIG${FINETUNE_CONFIG:+, fine-tuned by $FINETUNE_CONFIG}" <<'EOF'
 import json, sys, os
 run, out, config = sys.argv[1:4]
 result = {"config": config, "heldout": "dvso simulate --appearance varied along KITTI 08 (poses 1000-1149, seed 308), "
@@ -296,11 +349,13 @@ EOF
 }
 
 case "$STEP" in
-  all) step_data; step_train; step_export; step_eval ;;
+  all) step_data; step_train; step_export; step_finetune; step_tb; step_eval ;;
   data) step_data ;;
   train) step_train ;;
   monitor) curve_monitor ;;  # the curve of a training started elsewhere
   export) step_export ;;
+  finetune) step_finetune ;;
+  tb) step_tb ;;
   eval) step_eval ;;
-  *) echo "usage: $0 [all|data|train|monitor|export|eval]" >&2; exit 2 ;;
+  *) echo "usage: $0 [all|data|train|monitor|export|finetune|tb|eval]" >&2; exit 2 ;;
 esac
