@@ -21,15 +21,18 @@ namespace fs = std::filesystem;
 
 double MaxDifference(const torch::Tensor& a, const torch::Tensor& b) { return (a - b).abs().max().item<double>(); }
 
-TEST(Export, TracedModuleMatchesTheCppModuleAtTwoSizes) {
-  torch::manual_seed(9);
+// A tiny StackNet in eval mode whose residual path is non-trivial (its heads start at zero).
+StackNet TinyStackNetWithResidual(uint64_t seed) {
+  torch::manual_seed(seed);
   StackNet net(testing::TinyNetwork());
-  {
-    // Make the residual path non-trivial (its heads start at zero).
-    torch::NoGradGuard no_grad;
-    for (auto& p : net->residual_net()->parameters()) p.add_(torch::randn_like(p) * 0.005);
-  }
+  torch::NoGradGuard no_grad;
+  for (auto& p : net->residual_net()->parameters()) p.add_(torch::randn_like(p) * 0.005);
   net->eval();
+  return net;
+}
+
+TEST(Export, TracedModuleMatchesTheCppModuleAtTwoSizes) {
+  StackNet net = TinyStackNetWithResidual(9);
   const std::string path = dvso::testing::ScratchPath("export.pt");
   for (const bool use_residual : {false, true}) {
     torch::jit::Module traced = TraceStackNet(net, use_residual, 32, 64);
@@ -61,13 +64,7 @@ TEST(Export, TracedModuleMatchesTheCppModuleAtTwoSizes) {
 }
 
 TEST(Export, InferenceLayoutGivesTheSameDisparities) {
-  torch::manual_seed(11);
-  StackNet net(testing::TinyNetwork());
-  {
-    torch::NoGradGuard no_grad;
-    for (auto& p : net->residual_net()->parameters()) p.add_(torch::randn_like(p) * 0.005);
-  }
-  net->eval();
+  StackNet net = TinyStackNetWithResidual(11);
   torch::jit::Module module = TraceStackNet(net, /*use_residual=*/true, 32, 64);
   const torch::Tensor image = torch::rand({1, 3, 64, 128});
   torch::NoGradGuard no_grad;
