@@ -10,6 +10,7 @@
 #include <string>
 
 #include "core/disparity_io.h"
+#include "tests/dvso_cli_runner.h"
 #include "tests/temp_dir.h"
 
 namespace dvso {
@@ -60,18 +61,14 @@ TEST_F(PredictCli, ImagesKeepTheirNames) {
 
 // `dvso bench` measures at the model's own input size unless told otherwise (the tiny config: 64x32).
 TEST_F(PredictCli, BenchDefaultsToTheModelsInputSize) {
-  const std::string out = (dir_ / "bench.json").string();
-  const std::string bench = std::string(DVSO_BINARY) + " bench --device cpu --threads 1 --warmup 1 --runs 3 --json --model " +
-                            model_;
-  ASSERT_EQ(std::system((bench + " > " + out + " 2>/dev/null").c_str()), 0);
-  std::ifstream in(out);
-  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  EXPECT_NE(text.find("\"width\": 64"), std::string::npos) << text;
-  EXPECT_NE(text.find("\"height\": 32"), std::string::npos) << text;
-  ASSERT_EQ(std::system((bench + " --width 128 --height 64 > " + out + " 2>/dev/null").c_str()), 0);
-  std::ifstream again(out);
-  const std::string given((std::istreambuf_iterator<char>(again)), std::istreambuf_iterator<char>());
-  EXPECT_NE(given.find("\"width\": 128"), std::string::npos) << given;
+  const std::string bench = "bench --device cpu --threads 1 --warmup 1 --runs 3 --json --model " + model_;
+  const dvso::testing::CliRun defaults = dvso::testing::RunDvso(bench, /*merge_stderr=*/false);
+  ASSERT_EQ(defaults.exit_code, 0);
+  EXPECT_NE(defaults.out.find("\"width\": 64"), std::string::npos) << defaults.out;
+  EXPECT_NE(defaults.out.find("\"height\": 32"), std::string::npos) << defaults.out;
+  const dvso::testing::CliRun given = dvso::testing::RunDvso(bench + " --width 128 --height 64", /*merge_stderr=*/false);
+  ASSERT_EQ(given.exit_code, 0);
+  EXPECT_NE(given.out.find("\"width\": 128"), std::string::npos) << given.out;
 }
 
 TEST_F(PredictCli, TwoImagesWithTheSameNameAreAnError) {
