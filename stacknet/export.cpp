@@ -57,7 +57,7 @@ void UseInferenceLayout(torch::jit::Module& module, const torch::Device& device)
 }
 
 torch::Tensor ToInferenceLayout(const torch::Tensor& input, const torch::Device& device) {
-  return device.is_cpu() && input.dim() == 4 ? input.contiguous(at::MemoryFormat::ChannelsLast) : input;
+  return device.is_cpu() && input.dim() == 4 ? input.contiguous(at::MemoryFormat::ChannelsLast) : input.contiguous();
 }
 
 ModelMetadata ReadModelMetadata(const std::string& model_path) {

@@ -78,6 +78,9 @@ TEST(Export, InferenceLayoutGivesTheSameDisparities) {
   EXPECT_GT(channels_last, 0u);  // the layout did change (1x1 kernels are both)
   const torch::Tensor input = ToInferenceLayout(image, cpu);
   EXPECT_TRUE(input.is_contiguous(at::MemoryFormat::ChannelsLast));
+  // An NHWC buffer viewed as NCHW (how the predictor wraps an image) is used as it is.
+  const torch::Tensor nhwc_view = input.permute({0, 2, 3, 1}).contiguous().permute({0, 3, 1, 2});
+  EXPECT_EQ(ToInferenceLayout(nhwc_view, cpu).data_ptr(), nhwc_view.data_ptr());
   const auto converted = module.forward({input}).toTuple();
   for (int i = 0; i < 2; ++i) {
     EXPECT_LT(MaxDifference(reference->elements()[i].toTensor(), converted->elements()[i].toTensor()), 1e-4);
