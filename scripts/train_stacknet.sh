@@ -111,9 +111,17 @@ TB_WORLDS=("tb05 05 1000 300 9505" "tb00 00 3000 300 9701" "tb02 02 1500 300 970
 # Frames of each held-out segment used for the per-epoch curve (every 5th: 90 frames).
 CURVE_STEP=5
 
-render() {  # name pose first count seed
-  local out="$DATA/$1"
-  [[ -f "$out/simulation.yaml" ]] && return 0  # written after the last frame
+# Renders world `name` into $DATA/name unless complete; extra arguments go to `dvso simulate`.
+simulate_world() {  # name pose first count seed [simulate options...]
+  local name=$1 pose=$2 first=$3 count=$4 seed=$5
+  shift 5
+  [[ -f "$DATA/$name/simulation.yaml" ]] && return 0  # written after the last frame
+  log "simulate $name (KITTI $pose from pose $first, $count frames, seed $seed) $*"
+  run "$DVSO" simulate --out "$DATA/$name" --trajectory "data/kitti_poses/$pose.txt" --first "$first" --count "$count" \
+    --seed "$seed" --appearance varied "$@" --quiet > "$DATA/$name.simulate.log"
+}
+
+render() {  # name pose first count seed: a training or held-out world at the network's size, colour
   # Training worlds also vary the street layout (building, car, tree density drawn from the
   # seed); held-out worlds keep the simulator's defaults, so no held-out look was chosen.
   local layout=()
@@ -121,9 +129,7 @@ render() {  # name pose first count seed
     layout=(--building-density "0.$((40 + $5 * 37 % 56))" --car-density "0.$((25 + $5 * 53 % 66))"
             --tree-density "$(( $5 * 29 % 13 / 10 )).$(( $5 * 29 % 13 % 10 ))")
   fi
-  log "simulate $1 (KITTI $2 from pose $3, $4 frames, seed $5) ${layout[*]:-}"
-  run "$DVSO" simulate --out "$out" --trajectory "data/kitti_poses/$2.txt" --first "$3" --count "$4" --seed "$5" \
-    --width $RENDER_W --height $RENDER_H --color --appearance varied "${layout[@]}" --quiet > "$DATA/$1.simulate.log"
+  simulate_world "$@" --width $RENDER_W --height $RENDER_H --color "${layout[@]}"
 }
 
 label() {  # name
@@ -256,13 +262,8 @@ step_tb() {
   local pairs=()
   for spec in "${TB_WORLDS[@]}"; do
     set -- $spec
-    local out="$DATA/$1"
-    if [[ ! -f "$out/simulation.yaml" ]]; then  # written after the last frame
-      log "simulate $1 (KITTI $2 from pose $3, $4 frames, seed $5, 1241x376 grey)"
-      run "$DVSO" simulate --out "$out" --trajectory "data/kitti_poses/$2.txt" --first "$3" --count "$4" --seed "$5" \
-        --appearance varied --quiet > "$DATA/$1.simulate.log"
-    fi
-    pairs+=(--sequence "$out" --gt "$out/poses.txt")
+    simulate_world "$@"  # the simulator's default camera: KITTI's 1241x376 grey
+    pairs+=(--sequence "$DATA/$1" --gt "$DATA/$1/poses.txt")
   done
   log "tune-baseline $TB_VALUES on ${#TB_WORLDS[@]} worlds"
   rm -rf "$FINAL_RUN/tb"
