@@ -4,10 +4,10 @@
 #include <iomanip>
 #include <iostream>
 #include <nlohmann/json.hpp>
-#include <torch/cuda.h>
 
 #include "core/error.h"
 #include "pipelines/commands.h"
+#include "stacknet/device.h"
 #include "stacknet/export.h"
 #include "stacknet/latency.h"
 
@@ -35,25 +35,24 @@ void AddBenchCommand(CLI::App& app) {
   cmd->add_option("--threads", args->options.num_threads, "CPU threads (0 = hardware cores)");
   cmd->add_flag("--json", args->json, "Print one JSON object");
   cmd->callback([args] {
+    const torch::Device device = stacknet::SelectDevice(args->options.device, args->options.num_threads);
+    const stacknet::LoadedModel loaded = stacknet::LoadModel(args->model, device);  // once, for every dtype
     if (args->options.height <= 0 || args->options.width <= 0) {
       // What the model sees in `predict` and DVSO; files without the size: LatencyOptions' default (the paper's).
-      const ModelMetadata metadata = stacknet::ReadModelMetadata(args->model);
+      const ModelMetadata& metadata = loaded.metadata;
       const bool known = metadata.input_width > 0 && metadata.input_height > 0;
       const stacknet::LatencyOptions fallback;
       if (args->options.width <= 0) args->options.width = known ? metadata.input_width : fallback.width;
       if (args->options.height <= 0) args->options.height = known ? metadata.input_height : fallback.height;
     }
     std::vector<std::string> dtypes{args->dtype};
-    if (args->dtype == "all") {
-      dtypes = {"fp32"};
-      const bool cuda = args->options.device == "cuda" || (args->options.device == "auto" && torch::cuda::is_available());
-      if (cuda) dtypes = {"fp32", "fp16", "bf16"};
-    }
+    if (args->dtype == "all") dtypes = device.is_cuda() ? std::vector<std::string>{"fp32", "fp16", "bf16"}
+                                                         : std::vector<std::string>{"fp32"};
     nlohmann::json results = nlohmann::json::array();
     for (const auto& dtype : dtypes) {
       stacknet::LatencyOptions options = args->options;
       options.dtype = dtype;
-      const stacknet::LatencyStats s = stacknet::MeasureLatency(args->model, options);
+      const stacknet::LatencyStats s = stacknet::MeasureLatency(loaded.module, device, options);
       results.push_back({{"model", args->model}, {"device", s.device}, {"dtype", s.dtype}, {"batch", s.batch},
                          {"height", s.height}, {"width", s.width}, {"threads", s.threads}, {"runs", s.runs},
                          {"median_ms", s.median_ms}, {"p90_ms", s.p90_ms}, {"mean_ms", s.mean_ms},

@@ -60,18 +60,20 @@ torch::Tensor ToInferenceLayout(const torch::Tensor& input, const torch::Device&
   return device.is_cpu() && input.dim() == 4 ? input.contiguous(at::MemoryFormat::ChannelsLast) : input.contiguous();
 }
 
-ModelMetadata ReadModelMetadata(const std::string& model_path) {
+LoadedModel LoadModel(const std::string& model_path, const torch::Device& device) {
   torch::jit::ExtraFilesMap extra{{kModelMetadataFile, ""}};
-  const torch::jit::Module module = LoadTorchScript(model_path, torch::kCPU, &extra);
-  ModelMetadata m;
+  LoadedModel loaded{LoadTorchScript(model_path, device, &extra), {}};
   const std::string& json = extra[kModelMetadataFile];
-  if (!json.empty()) m = ModelMetadata::FromJson(json, model_path + " (" + kModelMetadataFile + ")");
-  if (m.input_width == 0 && module.hasattr("input_width") && module.hasattr("input_height")) {
-    m.input_width = static_cast<int>(module.attr("input_width").toInt());
-    m.input_height = static_cast<int>(module.attr("input_height").toInt());
+  if (!json.empty()) loaded.metadata = ModelMetadata::FromJson(json, model_path + " (" + kModelMetadataFile + ")");
+  const torch::jit::Module& module = loaded.module;
+  if (module.hasattr("input_width") && module.hasattr("input_height")) {
+    loaded.metadata.input_width = static_cast<int>(module.attr("input_width").toInt());
+    loaded.metadata.input_height = static_cast<int>(module.attr("input_height").toInt());
   }
-  return m;
+  return loaded;
 }
+
+ModelMetadata ReadModelMetadata(const std::string& model_path) { return LoadModel(model_path, torch::kCPU).metadata; }
 
 void WriteModelWithMetadata(const std::string& in_path, const std::string& out_path, const ModelMetadata& metadata) {
   torch::jit::Module module = LoadTorchScript(in_path, torch::kCPU);

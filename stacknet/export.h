@@ -64,8 +64,16 @@ torch::jit::Module LoadTorchScript(const std::string& path, const torch::Device&
 void UseInferenceLayout(torch::jit::Module& module, const torch::Device& device);
 torch::Tensor ToInferenceLayout(const torch::Tensor& input, const torch::Device& device);
 
-// Reads the metadata of a TorchScript file written by `dvso export` (input
-// size from the attributes for files without the JSON entry). Throws dvso::Error.
+// A TorchScript file from `dvso export`, loaded once: the module and its
+// metadata (the JSON extra file; the input size from the module's attributes
+// input_width / input_height when it has them, the size it was traced for).
+struct LoadedModel {
+  torch::jit::Module module;
+  ModelMetadata metadata;
+};
+LoadedModel LoadModel(const std::string& model_path, const torch::Device& device);
+
+// LoadModel(...).metadata on the CPU. Throws dvso::Error.
 ModelMetadata ReadModelMetadata(const std::string& model_path);
 
 // Re-saves an exported TorchScript file with the given metadata (e.g. to stamp

@@ -5,7 +5,6 @@
 #include <numeric>
 
 #include "core/error.h"
-#include "stacknet/device.h"
 #include "stacknet/export.h"
 
 namespace dvso::stacknet {
@@ -26,12 +25,11 @@ double Percentile(std::vector<double> samples, double percent) {
   return samples[lo] + (rank - lo) * (samples[hi] - samples[lo]);
 }
 
-LatencyStats MeasureLatency(const std::string& model_path, const LatencyOptions& options) {
+LatencyStats MeasureLatency(const torch::jit::Module& loaded, const torch::Device& device, const LatencyOptions& options) {
   options.Check();
-  const torch::Device device = SelectDevice(options.device, options.num_threads);
   const bool cuda = device.is_cuda();
   Require(cuda || options.dtype == "fp32", "fp16/bf16 latency is measured on CUDA only");
-  torch::jit::Module module = LoadTorchScript(model_path, device);
+  torch::jit::Module module = loaded.deepcopy();
   module.eval();
   const torch::ScalarType type = options.dtype == "fp16"   ? torch::kHalf
                                  : options.dtype == "bf16" ? torch::kBFloat16

@@ -33,6 +33,9 @@ struct LatencyStats {
 // Percentile (0..100) of samples by linear interpolation between order statistics.
 double Percentile(std::vector<double> samples, double percent);
 
-LatencyStats MeasureLatency(const std::string& model_path, const LatencyOptions& options);
+// Times `module`, loaded on `device` (SelectDevice with options.device and
+// options.num_threads): a deep copy is converted to options.dtype, so one loaded
+// module serves every dtype and the caller's module is left as it was.
+LatencyStats MeasureLatency(const torch::jit::Module& module, const torch::Device& device, const LatencyOptions& options);
 
 }  // namespace dvso::stacknet

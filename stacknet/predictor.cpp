@@ -21,18 +21,15 @@ TorchDisparityPredictor::TorchDisparityPredictor(const std::string& model_path, 
     : model_path_(model_path), options_(options), device_(SelectDevice(options.device, options.num_threads)) {
   options_.Check();
   RequireFile(std::filesystem::is_regular_file(model_path), model_path, "model file does not exist");
-  torch::jit::ExtraFilesMap extra{{kModelMetadataFile, ""}};
-  module_ = LoadTorchScript(model_path, device_, &extra);
+  LoadedModel loaded = LoadModel(model_path, device_);
+  module_ = std::move(loaded.module);
   module_.eval();
   UseInferenceLayout(module_, device_);
   RequireFile(module_.hasattr("input_width") && module_.hasattr("input_height"), model_path,
               "not a dvso export (no input_width/input_height attributes)");
-  input_width_ = static_cast<int>(module_.attr("input_width").toInt());
-  input_height_ = static_cast<int>(module_.attr("input_height").toInt());
-  const std::string& json = extra[kModelMetadataFile];
-  if (!json.empty()) metadata_ = ModelMetadata::FromJson(json, model_path + " (" + kModelMetadataFile + ")");
-  metadata_.input_width = input_width_;
-  metadata_.input_height = input_height_;
+  metadata_ = loaded.metadata;
+  input_width_ = metadata_.input_width;
+  input_height_ = metadata_.input_height;
 }
 
 DisparityPair TorchDisparityPredictor::PredictImage(const cv::Mat& image) {
