@@ -7,6 +7,8 @@
 #include <unistd.h>
 
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <string>
 #include <system_error>
 
@@ -43,6 +45,12 @@ inline std::string ScratchDir(const std::string& name) {
   const std::string path = ScratchPath(name);
   std::filesystem::create_directories(path);
   return path;
+}
+
+// The whole text of a file written by the code under test ("" when it cannot be read).
+inline std::string ReadText(const std::string& path) {
+  std::ifstream in(path);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
 }
 
 // A scratch folder for one test, removed when the test ends (and with the root at the latest).

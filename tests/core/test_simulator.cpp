@@ -402,7 +402,9 @@ TEST(Simulator, VariedAppearanceKeepsTheGroundTruthExact) {
   for (int y = 0; y < a.left.depth.rows; y += 3)
     for (int x = 0; x < a.left.depth.cols; x += 3) {
       const float z = a.left.depth.at<float>(y, x);
-      if (z > 0) ASSERT_NEAR(z * a.disparity_left.at<float>(y, x), fxb, 1e-4 * fxb);
+      if (z > 0) {
+        ASSERT_NEAR(z * a.disparity_left.at<float>(y, x), fxb, 1e-4 * fxb);
+      }
     }
   // Temporal: the GT poses (height bounce included) reproject frame 0 into frame 1.
   const PinholeCamera& cam = simulator.camera().left;

@@ -233,7 +233,9 @@ TEST(DvsoMode, EveryPredictionTimingOnAWorkerStaysMetric) {
     } else {
       EXPECT_LT(oracle->calls, kFrames);  // only keyframes
     }
-    if (timing == "keyframe-async") EXPECT_GT(worker.prefetched_used(), 5);  // attached after the keyframe was made
+    if (timing == "keyframe-async") {
+      EXPECT_GT(worker.prefetched_used(), 5);  // attached after the keyframe was made
+    }
   }
 }
 
@@ -279,11 +281,6 @@ TEST(DvsoMode, NaNZeroAndNegativePredictionsAreSkippedNotFatal) {
 namespace dvso::vo {
 namespace {
 
-std::string ReadText(const std::string& path) {
-  std::ifstream in(path);
-  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-}
-
 TEST(DvsoCli, RunsOnDisparityFilesAndRejectsBadInputWithOneLineNothingWritten) {
   const std::string dir = dvso::testing::FreshSimulatedSequence("dvso_mode_cli", 12);
   ASSERT_FALSE(dir.empty());
@@ -294,7 +291,7 @@ TEST(DvsoCli, RunsOnDisparityFilesAndRejectsBadInputWithOneLineNothingWritten) {
   ASSERT_EQ(good.exit_code, 0) << good.out;
   EXPECT_NE(good.out.find("virtual baseline"), std::string::npos);
   EXPECT_EQ(ReadTrajectory(dir + "/good/trajectory.txt", TrajectoryFormat::kKitti).size(), 12u);
-  const std::string log = ReadText(dir + "/good/run_log.csv");
+  const std::string log = dvso::testing::ReadText(dir + "/good/run_log.csv");
   EXPECT_NE(log.find("virtual_stereo_residuals,virtual_stereo_energy"), std::string::npos);
 
   // A missing map: one line naming the file, exit 1, no output files.
@@ -358,8 +355,7 @@ TEST(DvsoCli, AblationAndTuneBaselinePrintEveryRow) {
   // dvso.prediction_timing and then the flag still decide.
   EXPECT_EQ(j["prediction_timing"], "keyframe-blocking");
   EXPECT_EQ(t["prediction_timing"], "keyframe-blocking");
-  std::ifstream saved_config(dir + "/abl/full/config.yaml");
-  const std::string saved((std::istreambuf_iterator<char>(saved_config)), std::istreambuf_iterator<char>());
+  const std::string saved = dvso::testing::ReadText(dir + "/abl/full/config.yaml");
   EXPECT_NE(saved.find("prediction_timing: keyframe-blocking"), std::string::npos) << saved;
   std::ofstream(dir + "/async.yaml") << "dvso:\n  prediction_timing: keyframe-async\n";
   const std::string one_run = " --json --values 0.54:0.1:0.54 --count 8";

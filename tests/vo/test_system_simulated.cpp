@@ -165,8 +165,7 @@ TEST(SystemSimulated, CliWritesEveryOutput) {
   EXPECT_EQ(lines, 9);  // header + 8 frames
   EXPECT_TRUE(std::filesystem::exists(out_dir + "/points.ply"));
   EXPECT_TRUE(std::filesystem::exists(out_dir + "/config.yaml"));
-  std::ifstream printed(dir + "/odo.log");
-  const std::string text((std::istreambuf_iterator<char>(printed)), std::istreambuf_iterator<char>());
+  const std::string text = dvso::testing::ReadText(dir + "/odo.log");
   EXPECT_NE(text.find("active_points: 800"), std::string::npos);  // the loaded config is printed
   // Strict config: a typo is an error with exit code 1.
   std::ofstream(dir + "/bad.yaml") << "activ_points: 5\n";
