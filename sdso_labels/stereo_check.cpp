@@ -214,6 +214,24 @@ float StereoLabelChecker::CostAt(int x, int y, float disparity) const {
   return (1.0f - frac) * c0 + frac * c1;
 }
 
+int StereoLabelChecker::ScanFullRange(int x, int y, int max_d) {
+  // Right window centres x - max_d .. x; costs_[d] belongs to centre x - d.
+  ScanCosts(left_, left_mean_, left_norm_, right_, right_norm_, x, y, x - max_d, x + 1, &back_costs_);
+  costs_.resize(max_d + 1);
+  for (int d = 0; d <= max_d; ++d) costs_[d] = back_costs_[max_d - d];
+  return ArgMin(costs_);
+}
+
+double StereoLabelChecker::BestDisparity(int x, int y) {
+  const int r = options_.window_radius;
+  if (y < r || y >= left_.rows - r || x < r || x >= left_.cols - r) return -1.0;
+  const int max_d = std::min(x - r, options_.max_disparity);
+  if (max_d < 0) return -1.0;
+  const int best = ScanFullRange(x, y, max_d);
+  if (costs_[best] >= kNoMatch) return -1.0;
+  return SubPixelMinimum(costs_, best);
+}
+
 bool StereoLabelChecker::Keep(int x, int y, float label) {
   const int r = options_.window_radius;
   if (!(label > 0) || y < r || y >= left_.rows - r || x < r || x >= left_.cols - r) return false;
@@ -244,11 +262,7 @@ bool StereoLabelChecker::Keep(int x, int y, float label) {
       if (CostAt(xs, ys, label) > options_.edge_max_cost) return false;
     }
   }
-  // Right window centres x - max_d .. x; costs_[d] belongs to centre x - d.
-  ScanCosts(left_, left_mean_, left_norm_, right_, right_norm_, x, y, x - max_d, x + 1, &back_costs_);
-  costs_.resize(max_d + 1);
-  for (int d = 0; d <= max_d; ++d) costs_[d] = back_costs_[max_d - d];
-  const int best = ArgMin(costs_);
+  const int best = ScanFullRange(x, y, max_d);
   const double best_sub = SubPixelMinimum(costs_, best);
   if (std::abs(best_sub - label) > options_.max_offset) return false;
   if (!IsUnique(costs_, best, best_sub, options_)) return false;

@@ -53,6 +53,11 @@ class StereoLabelChecker {
   // True when the label `disparity` (px) at left pixel (x, y) passes the test.
   bool Keep(int x, int y, float disparity);
 
+  // Sub-pixel disparity of the best match over the whole range at left pixel
+  // (x, y) (the match Keep() compares a label with); -1 when the window does
+  // not fit or has no texture.
+  double BestDisparity(int x, int y);
+
  private:
   // 1 - ZNCC of the left window at (x, y) and the right one at x - disparity
   // (linear between the two integer disparities around it).
@@ -61,6 +66,8 @@ class StereoLabelChecker {
   // windows of `other` centred at x_begin .. x_end - 1 of the same row.
   void ScanCosts(const cv::Mat& fixed, const cv::Mat& fixed_mean, const cv::Mat& fixed_norm, const cv::Mat& other,
                  const cv::Mat& other_norm, int x, int y, int x_begin, int x_end, std::vector<float>* costs);
+  // Fills costs_[d] for d = 0 .. max_d at left pixel (x, y); returns the best d.
+  int ScanFullRange(int x, int y, int max_d);
 
   StereoCheckOptions options_;
   cv::Mat left_, right_;            // CV_32F, centred around 0 (keeps float sums accurate)

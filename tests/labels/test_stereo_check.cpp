@@ -73,6 +73,19 @@ TEST(StereoCheck, KeepsCorrectAndRejectsWrongLabels) {
   EXPECT_EQ(labels.at<float>(30, 100), 0.f);
 }
 
+TEST(StereoCheck, BestDisparityIsTheMatchKeepCompares) {
+  const cv::Mat left = RandomTexture(60, 160, 1);
+  const cv::Mat right = ShiftedRight(left, 12);
+  StereoLabelChecker checker(left, right, StereoCheckOptions{});
+  EXPECT_NEAR(checker.BestDisparity(100, 30), 12.0, 0.1);  // parabola fit of the cost: a few 0.01 px of bias
+  EXPECT_TRUE(checker.Keep(100, 30, static_cast<float>(checker.BestDisparity(100, 30))));
+  EXPECT_EQ(checker.BestDisparity(1, 30), -1.0);    // window leaves the image
+  EXPECT_EQ(checker.BestDisparity(100, 58), -1.0);
+  const cv::Mat flat(60, 160, CV_8U, cv::Scalar(90));
+  StereoLabelChecker flat_checker(flat, flat, StereoCheckOptions{});
+  EXPECT_EQ(flat_checker.BestDisparity(100, 30), -1.0);  // no texture, no match
+}
+
 TEST(StereoCheck, RightImageLabelsMatchIntoTheLeftImage) {
   const cv::Mat left = RandomTexture(60, 160, 6);
   const cv::Mat right = ShiftedRight(left, 12);  // right x shows left x + 12
