@@ -7,6 +7,7 @@
 #include <functional>
 #include <iomanip>
 #include <limits>
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <set>
 #include <sstream>
@@ -37,6 +38,13 @@ double Median(std::vector<double> values) {
 }
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// Shortest decimal form ("5", "0.5", "12.25") for range names.
+std::string FormatNumber(double value) {
+  std::ostringstream s;
+  s << value;
+  return s.str();
+}
 
 }  // namespace
 
@@ -76,6 +84,13 @@ void DepthEvalOptions::Check() const {
             "eval-depth: disparity maps need focal length * baseline (--fxb, --calib or --kitti-focal) "
             "to become depths");
   }
+  Require(std::isfinite(min_image_gradient) && min_image_gradient >= 0.0,
+          "eval-depth: the minimum image gradient must be >= 0");
+  Require(min_image_gradient == 0.0 || !image_dir.empty(),
+          "eval-depth: a minimum image gradient needs the images (--images)");
+  Require(image_dir.empty() || !range_edges.empty(),
+          "eval-depth: images only select the pixels of the depth-range breakdown: give --ranges too");
+  if (!range_edges.empty()) DepthRangeAccumulator check_edges(range_edges);  // throws on invalid edges
 }
 
 double KittiFocalLengthForWidth(int width) {
@@ -246,6 +261,8 @@ DepthEvalResult EvaluateNamedMaps(const std::vector<std::string>& names, const s
                                   const std::function<cv::Mat(size_t, const cv::Mat&)>& prediction,
                                   const std::function<std::string(size_t)>& label, const DepthEvalOptions& options) {
   DepthEvalResult result;
+  const bool with_ranges = !options.range_edges.empty();
+  DepthRangeAccumulator ranges(with_ranges ? options.range_edges : std::vector<double>{0.0, 1.0});
   for (size_t i = 0; i < names.size(); ++i) {
     const std::string& name = names[i];
     const std::string gt_path = JoinPath(gt_dir, name);
@@ -276,10 +293,30 @@ DepthEvalResult EvaluateNamedMaps(const std::vector<std::string>& names, const s
     }
     result.names.push_back(name);
     result.per_image.push_back(metrics);
+    if (with_ranges) {
+      cv::Mat mask;
+      if (!options.image_dir.empty()) {
+        const std::string image_path = JoinPath(options.image_dir, name);
+        const cv::Mat grey = cv::imread(image_path, cv::IMREAD_GRAYSCALE);
+        RequireFile(!grey.empty(), image_path, "missing or unreadable image (--images: named like the GT maps)");
+        RequireFile(grey.size() == gt_map.size(), image_path,
+                    "image size differs from its GT map " + gt_path);
+        mask = TexturedPixelMask(grey, options.min_image_gradient);
+      }
+      try {
+        ranges.Add(pred_depth, gt_depth, mask, options, metrics.scale);
+      } catch (const Error& e) {
+        throw Error(label(i), e.what());
+      }
+    }
   }
   RequireFile(!result.per_image.empty(), gt_dir,
               "no ground-truth map has a valid pixel inside the crop and (min_depth, max_depth)");
   result.mean = AverageDepthMetrics(result.per_image);
+  if (with_ranges) {
+    result.ranges = ranges.Ranges();
+    result.all_ranges = ranges.Overall();
+  }
   return result;
 }
 
@@ -312,6 +349,7 @@ DepthEvalResult EvaluateDepthFolders(const std::string& pred_dir, const std::str
 DepthEvalResult EvaluateDepthSplit(const std::string& split_path, const std::string& pred,
                                    const std::string& gt_dir, const DepthEvalOptions& options) {
   options.Check();
+  Require(options.image_dir.empty(), "eval-depth --split: --images is for folder evaluation only");
   const std::vector<SplitEntry> entries = ReadSplitFile(split_path);
   std::vector<std::string> names;
   for (size_t i = 0; i < entries.size(); ++i) {
@@ -349,6 +387,11 @@ nlohmann::json MetricsToJson(const DepthMetrics& m, bool with_scale) {
   return j;
 }
 
+nlohmann::json RangeToJson(const DepthRangeStats& r) {
+  return {{"min_depth", r.min_depth}, {"max_depth", r.max_depth}, {"pixels", r.pixels},
+          {"abs_rel", r.abs_rel},     {"a1", r.a1},               {"median_pred_over_gt", r.median_pred_over_gt}};
+}
+
 }  // namespace
 
 nlohmann::json DepthEvalResultToJson(const DepthEvalResult& result, const DepthEvalOptions& options) {
@@ -370,6 +413,13 @@ nlohmann::json DepthEvalResultToJson(const DepthEvalResult& result, const DepthE
     per_image.push_back(entry);
   }
   j["per_image"] = per_image;
+  if (!result.ranges.empty()) {
+    nlohmann::json ranges = nlohmann::json::array();
+    for (const DepthRangeStats& r : result.ranges) ranges.push_back(RangeToJson(r));
+    j["ranges"] = {{"min_image_gradient", options.min_image_gradient},
+                   {"per_range", ranges},
+                   {"all", RangeToJson(result.all_ranges)}};
+  }
   return j;
 }
 
@@ -389,6 +439,22 @@ std::string FormatDepthEvalResult(const DepthEvalResult& result, const DepthEval
       << std::setw(10) << m.rmse << std::setw(10) << m.rmse_log << std::setw(10) << m.a1 << std::setw(10) << m.a2
       << std::setw(10) << m.a3 << "\n";
   if (options.median_scaling) out << "mean median-scaling factor: " << m.scale << "\n";
+  if (!result.ranges.empty()) {
+    out << "\nby GT depth range (pixels pooled over images"
+        << (options.image_dir.empty() ? ""
+                                      : ", image gradient >= " + FormatNumber(options.min_image_gradient))
+        << "; pred/GT < 1: predicted too near)\n";
+    out << std::setw(14) << "range m" << std::setw(12) << "pixels" << std::setw(10) << "abs_rel" << std::setw(10)
+        << "a1" << std::setw(16) << "median pred/GT" << "\n";
+    auto row = [&out](const std::string& name, const DepthRangeStats& r) {
+      out << std::setw(14) << name << std::setw(12) << r.pixels << std::setw(10) << r.abs_rel << std::setw(10)
+          << r.a1 << std::setw(16) << r.median_pred_over_gt << "\n";
+    };
+    for (const DepthRangeStats& r : result.ranges) {
+      row(FormatNumber(r.min_depth) + "-" + FormatNumber(r.max_depth), r);
+    }
+    row("all", result.all_ranges);
+  }
   return out.str();
 }
 

@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include "core/depth_ranges.h"
+
 namespace dvso {
 
 enum class MapKind { kDepth, kDisparity };
@@ -29,6 +31,13 @@ struct DepthEvalOptions {
   double min_depth = 1e-3;     // GT kept when > min_depth; predictions clamped up to it (m)
   double max_depth = 80.0;     // GT kept when < max_depth; predictions clamped down to it (m)
   bool median_scaling = false; // scale predictions by median(gt) / median(pred) per image (monocular)
+  // Optional breakdown by GT depth range (core/depth_ranges.h), pixels pooled over images; empty = none.
+  std::vector<double> range_edges;
+  // Breakdown only: count only pixels whose grey image gradient (Sobel magnitude) is >= this, the kind of
+  // pixel DSO selects; needs image_dir (folder evaluation: images named like the GT maps, GT size). The
+  // main metrics always use every valid GT pixel (the standard protocol).
+  double min_image_gradient = 0.0;
+  std::string image_dir;
 
   // Throws dvso::Error on invalid values (e.g. a disparity kind without fxb).
   void Check() const;
@@ -76,6 +85,8 @@ struct DepthEvalResult {
   std::vector<DepthMetrics> per_image;     // same order as names
   std::vector<std::string> skipped;        // files without any valid GT pixel (excluded from the mean)
   DepthMetrics mean;                       // arithmetic mean over evaluated images
+  std::vector<DepthRangeStats> ranges;     // per GT depth range (options.range_edges; empty without)
+  DepthRangeStats all_ranges;              // the pixels of all ranges together (pixels == 0 without)
 };
 
 // Evaluates every *.png of gt_dir against the same name in pred_dir (KITTI

@@ -86,6 +86,17 @@ void AddEvalDepthCommand(CLI::App& app) {
   cmd->add_option("--split", args->split_path,
                   "split file ('<drive> <frame> <side>' lines): GT and predictions are %06d.png in split order "
                   "(gt-depth --split); defaults become the paper's protocol: --gt-kind depth --crop garg --kitti-focal");
+  cmd->add_option("--ranges", args->options.range_edges,
+                  "also break the errors down by GT depth range, pixels pooled over images, with the signed "
+                  "median pred/GT depth per range: increasing edges in m, e.g. 0,5,10,20,40,80")
+      ->delimiter(',');
+  cmd->add_option("--images", args->options.image_dir,
+                  "with --ranges and --min-gradient: folder of the images, named like the GT maps, whose gradient "
+                  "selects the breakdown's pixels");
+  cmd->add_option("--min-gradient", args->options.min_image_gradient,
+                  "with --images: the breakdown counts only pixels with a Sobel gradient magnitude >= this (grey "
+                  "levels), where DSO selects points: DVSO's scale follows the median pred/GT there")
+      ->capture_default_str();
   cmd->add_flag("--json", args->json, "print exactly one JSON object on stdout");
   cmd->callback([args, cmd] { Run(*args, *cmd); });
 }

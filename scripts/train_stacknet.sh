@@ -286,6 +286,10 @@ step_eval() {
     fi
     run "$DVSO" eval-depth --pred "$pred/left" --gt "$DATA/heldout_all/gt" --calib "$DATA/heldout_all/calib.txt" \
       --max-depth 80 --json > "$RUN/metrics_$net.json"
+    # The signed bias by range at textured pixels, no depth cap: what DVSO's scale follows (docs/evaluation.md).
+    run "$DVSO" eval-depth --pred "$pred/left" --gt "$DATA/heldout_all/gt" --calib "$DATA/heldout_all/calib.txt" \
+      --max-depth 1000 --ranges 0,5,10,20,40,80,1000 --images "$DATA/heldout_all/image" --min-gradient 100 --json \
+      > "$RUN/metrics_${net}_ranges.json"
     for spec in "${TEST_SEGMENTS[@]}"; do
       set -- $spec
       local sub="$RUN/pred_${net}_$1"
@@ -318,6 +322,9 @@ def summary(path):  # the per-image rows stay in RUN/metrics_*.json (they made t
     return {k: v for k, v in json.load(open(path)).items() if k != "per_image"}
 for net in ("simplenet", "stacknet"):
     result[net] = {"all": summary(f"{run}/metrics_{net}.json")}
+    ranges = f"{run}/metrics_{net}_ranges.json"
+    if os.path.exists(ranges):  # 0-1000 m, pixels with a Sobel gradient >= 100
+        result[net]["textured_by_range"] = json.load(open(ranges))["ranges"]
     for seq in ("te08", "te09", "te10"):
         result[net][seq] = summary(f"{run}/metrics_{net}_{seq}.json")
     k15 = f"{run}/metrics_k15_{net}.json"

@@ -91,6 +91,19 @@ TEST(EvalCli, DepthJsonAndNameMismatch) {
               false);
   ASSERT_EQ(r.exit_code, 0) << r.out;
   EXPECT_NEAR(nlohmann::json::parse(r.out)["abs_rel"].get<double>(), 0.0, 1e-6);
+  // Breakdown by GT depth range: 20 m falls into [10, 40); predicted 25 m -> median pred / GT 1.25.
+  r = RunDvso("eval-depth --pred " + dir / "pred" + " --gt " + dir / "gt" + " --fxb 400 --ranges 0,10,40 --json",
+              false);
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  const nlohmann::json ranges = nlohmann::json::parse(r.out)["ranges"];
+  ASSERT_EQ(ranges["per_range"].size(), 2u);
+  EXPECT_EQ(ranges["per_range"][0]["pixels"].get<long>(), 0);
+  EXPECT_EQ(ranges["per_range"][1]["pixels"].get<long>(), 200);
+  EXPECT_NEAR(ranges["all"]["median_pred_over_gt"].get<double>(), 1.25, 1.25e-3);
+  r = RunDvso("eval-depth --pred " + dir / "pred" + " --gt " + dir / "gt" + " --fxb 400 --ranges 0,40 --min-gradient 50",
+              true);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.out.find("--images"), std::string::npos) << r.out;
 
   ASSERT_TRUE(cv::imwrite(dir / "pred/000001_10.png", pred));
   r = RunDvso("eval-depth --pred " + dir / "pred" + " --gt " + dir / "gt" + " --fxb 400", true);

@@ -224,5 +224,125 @@ TEST(EvalDepth, FolderErrorsNameTheFiles) {
   EXPECT_THROW(EvaluateDepthFolders(f.pred.string(), f.gt.string(), o), Error);
 }
 
+TEST(DepthRanges, HandComputedPooledStatisticsPerRange) {
+  // (pred, GT): range [0, 10): (1, 2), (4, 4), (12, 6) -> ratios 0.5, 1, 2; range [10, 80): (18, 15),
+  // (45, 30) -> 1.2, 1.5; GT 90 m is outside (min_depth, max_depth) = (1e-3, 80).
+  const cv::Mat gt = Map(1, 6, {2, 4, 6, 15, 30, 90});
+  const cv::Mat pred = Map(1, 6, {1, 4, 12, 18, 45, 10});
+  DepthRangeAccumulator acc({0.0, 10.0, 80.0});
+  acc.Add(pred, gt, cv::Mat(), DepthOnly());
+  const std::vector<DepthRangeStats> r = acc.Ranges();
+  ASSERT_EQ(r.size(), 2u);
+  EXPECT_EQ(r[0].pixels, 3);
+  EXPECT_NEAR(r[0].abs_rel, (0.5 + 0.0 + 1.0) / 3.0, 1e-12);
+  EXPECT_NEAR(r[0].a1, 1.0 / 3.0, 1e-12);
+  EXPECT_NEAR(r[0].median_pred_over_gt, 1.0, 1e-3);
+  EXPECT_EQ(r[1].pixels, 2);
+  EXPECT_NEAR(r[1].abs_rel, (0.2 + 0.5) / 2.0, 1e-12);
+  EXPECT_NEAR(r[1].a1, 0.5, 1e-12);
+  EXPECT_NEAR(r[1].median_pred_over_gt, 1.2, 1.2e-3);  // lower median of {1.2, 1.5}
+  const DepthRangeStats all = acc.Overall();
+  EXPECT_EQ(all.pixels, 5);
+  EXPECT_NEAR(all.median_pred_over_gt, 1.2, 1.2e-3);  // 0.5, 1, 1.2, 1.5, 2
+  EXPECT_EQ(all.min_depth, 0.0);
+  EXPECT_EQ(all.max_depth, 80.0);
+
+  // The image's median-scaling factor multiplies the predictions before the clamp to max_depth.
+  DepthRangeAccumulator scaled({0.0, 10.0, 80.0});
+  scaled.Add(pred, gt, cv::Mat(), DepthOnly(), 2.0);
+  const std::vector<DepthRangeStats> s = scaled.Ranges();
+  EXPECT_NEAR(s[0].median_pred_over_gt, 2.0, 2e-3);          // 1, 2, 4
+  EXPECT_NEAR(s[1].median_pred_over_gt, 36.0 / 15.0, 3e-3);  // 36 / 15 and 80 (clamped 90) / 30
+  EXPECT_NEAR(s[1].abs_rel, (21.0 / 15.0 + 50.0 / 30.0) / 2.0, 1e-12);
+  // An empty range reports NaN statistics, not zeros.
+  DepthRangeAccumulator far({40.0, 80.0});
+  far.Add(pred, gt, cv::Mat(), DepthOnly());
+  EXPECT_EQ(far.Overall().pixels, 0);
+  EXPECT_TRUE(std::isnan(far.Overall().median_pred_over_gt));
+}
+
+TEST(DepthRanges, TextureMaskKeepsOnlyPixelsAtImageEdges) {
+  // A vertical step between columns 3 and 4: only those two columns have a Sobel gradient (4 * 200).
+  cv::Mat grey(5, 8, CV_8U, cv::Scalar(0));
+  grey.colRange(4, 8).setTo(200);
+  const cv::Mat mask = TexturedPixelMask(grey, 100.0);
+  for (int v = 0; v < 5; ++v) {
+    for (int u = 0; u < 8; ++u) EXPECT_EQ(mask.at<uint8_t>(v, u) != 0, u == 3 || u == 4) << u << "," << v;
+  }
+  EXPECT_EQ(cv::countNonZero(TexturedPixelMask(grey, 801.0)), 0);
+  // Masked accumulation: the step's 10 pixels are 2x too far, the others exact.
+  const cv::Mat gt(5, 8, CV_32F, cv::Scalar(20.0f));
+  cv::Mat pred = gt.clone();
+  pred.colRange(3, 5).setTo(40.0f);
+  DepthRangeAccumulator textured({0.0, 80.0}), everywhere({0.0, 80.0});
+  textured.Add(pred, gt, mask, DepthOnly());
+  everywhere.Add(pred, gt, cv::Mat(), DepthOnly());
+  EXPECT_EQ(textured.Overall().pixels, 10);
+  EXPECT_NEAR(textured.Overall().median_pred_over_gt, 2.0, 2e-3);
+  EXPECT_EQ(everywhere.Overall().pixels, 40);
+  EXPECT_NEAR(everywhere.Overall().median_pred_over_gt, 1.0, 1e-3);
+}
+
+TEST(DepthRanges, InvalidEdgesAndOptionsAreErrors) {
+  EXPECT_THROW(DepthRangeAccumulator({5.0}), Error);
+  EXPECT_THROW(DepthRangeAccumulator({0.0, 10.0, 10.0}), Error);
+  EXPECT_THROW(DepthRangeAccumulator({-1.0, 5.0}), Error);
+  DepthEvalOptions o = DepthOnly();
+  o.min_image_gradient = 50.0;  // without images
+  EXPECT_THROW(o.Check(), Error);
+  o.image_dir = "images";  // images without ranges
+  EXPECT_THROW(o.Check(), Error);
+  o.range_edges = {0.0, 80.0};
+  EXPECT_NO_THROW(o.Check());
+  o.range_edges = {10.0, 0.0};
+  EXPECT_THROW(o.Check(), Error);
+}
+
+TEST(EvalDepth, FolderBreakdownByRangeAtTexturedPixels) {
+  Folders f("ranges");
+  // GT 20 px -> 20 m (fxb 400); a exact, b 25 px -> 16 m (pred / GT 0.8).
+  const cv::Mat gt(6, 8, CV_32F, cv::Scalar(20.0f));
+  WriteUint16(f.gt / "a.png", gt);
+  WriteUint16(f.gt / "b.png", gt);
+  WriteUint16(f.pred / "a.png", gt);
+  WriteUint16(f.pred / "b.png", cv::Mat(6, 8, CV_32F, cv::Scalar(25.0f)));
+  DepthEvalOptions o;
+  o.fxb = 400.0;
+  o.range_edges = {0.0, 10.0, 80.0};
+  DepthEvalResult r = EvaluateDepthFolders(f.pred.string(), f.gt.string(), o);
+  ASSERT_EQ(r.ranges.size(), 2u);
+  EXPECT_EQ(r.ranges[0].pixels, 0);
+  EXPECT_EQ(r.ranges[1].pixels, 2 * 48);
+  EXPECT_NEAR(r.ranges[1].abs_rel, 0.1, 1e-6);
+  EXPECT_NEAR(r.all_ranges.median_pred_over_gt, 0.8, 1e-3);  // lower median of 48 x 0.8 and 48 x 1
+  const nlohmann::json j = DepthEvalResultToJson(r, o);
+  EXPECT_EQ(j["ranges"]["per_range"].size(), 2u);
+  EXPECT_EQ(j["ranges"]["all"]["pixels"].get<long>(), 96);
+  EXPECT_NE(FormatDepthEvalResult(r, o).find("median pred/GT"), std::string::npos);
+
+  // Images: a step in a (columns 3-4 textured), b flat: only a's 12 textured pixels count.
+  const fs::path images = f.root / "images";
+  fs::create_directories(images);
+  cv::Mat step(6, 8, CV_8U, cv::Scalar(0));
+  step.colRange(4, 8).setTo(200);
+  ASSERT_TRUE(cv::imwrite((images / "a.png").string(), step));
+  ASSERT_TRUE(cv::imwrite((images / "b.png").string(), cv::Mat(6, 8, CV_8U, cv::Scalar(90))));
+  o.image_dir = images.string();
+  o.min_image_gradient = 100.0;
+  r = EvaluateDepthFolders(f.pred.string(), f.gt.string(), o);
+  EXPECT_EQ(r.all_ranges.pixels, 12);
+  EXPECT_NEAR(r.all_ranges.median_pred_over_gt, 1.0, 1e-3);
+  EXPECT_NEAR(r.mean.abs_rel, 0.1, 1e-6);  // the main metrics still use every GT pixel
+
+  // An image of another size is an error naming it.
+  ASSERT_TRUE(cv::imwrite((images / "b.png").string(), cv::Mat(3, 4, CV_8U, cv::Scalar(90))));
+  try {
+    EvaluateDepthFolders(f.pred.string(), f.gt.string(), o);
+    FAIL() << "an image of another size was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("b.png"), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace dvso
