@@ -14,12 +14,6 @@ namespace dvso {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr double kDeltaThreshold = 1.25;  // delta < 1.25 of Eigen et al. (the a1 column)
-
-int HistogramBins() {
-  return 2 * static_cast<int>(std::lround(DepthRangeAccumulator::kLogRatioLimit / DepthRangeAccumulator::kLogRatioBin)) +
-         1;
-}
 
 }  // namespace
 
@@ -35,14 +29,18 @@ cv::Mat TexturedPixelMask(const cv::Mat& grey, double min_gradient) {
   return mask;
 }
 
-DepthRangeAccumulator::DepthRangeAccumulator(std::vector<double> edges) : edges_(std::move(edges)) {
-  Require(edges_.size() >= 2, "depth ranges need at least two edges");
-  for (size_t i = 0; i < edges_.size(); ++i) {
-    Require(std::isfinite(edges_[i]) && edges_[i] >= 0.0, "depth range edges must be finite and >= 0");
-    if (i > 0) Require(edges_[i] > edges_[i - 1], "depth range edges must increase");
+void CheckDepthRangeEdges(const std::vector<double>& edges) {
+  Require(edges.size() >= 2, "depth ranges need at least two edges");
+  for (size_t i = 0; i < edges.size(); ++i) {
+    Require(std::isfinite(edges[i]) && edges[i] >= 0.0, "depth range edges must be finite and >= 0");
+    if (i > 0) Require(edges[i] > edges[i - 1], "depth range edges must increase");
   }
+}
+
+DepthRangeAccumulator::DepthRangeAccumulator(std::vector<double> edges) : edges_(std::move(edges)) {
+  CheckDepthRangeEdges(edges_);
   Sums empty;
-  empty.log_ratio_histogram.assign(HistogramBins(), 0);
+  empty.log_ratio_histogram.assign(kHistogramBins, 0);
   ranges_.assign(edges_.size() - 1, empty);
   overall_ = empty;
 }
@@ -53,33 +51,19 @@ void DepthRangeAccumulator::Accumulate(Sums* sums, double pred, double gt) const
   sums->a1 += std::max(pred / gt, gt / pred) < kDeltaThreshold;
   const double log_ratio = std::clamp(std::log(pred / gt), -kLogRatioLimit, kLogRatioLimit);
   const int bin = static_cast<int>(std::lround((log_ratio + kLogRatioLimit) / kLogRatioBin));
-  ++sums->log_ratio_histogram[std::clamp(bin, 0, HistogramBins() - 1)];
+  ++sums->log_ratio_histogram[std::clamp(bin, 0, kHistogramBins - 1)];
 }
 
 void DepthRangeAccumulator::Add(const cv::Mat& pred_depth, const cv::Mat& gt_depth, const cv::Mat& mask,
                                 const DepthEvalOptions& options, double scale) {
-  Require(pred_depth.type() == CV_32F && gt_depth.type() == CV_32F, "depth maps must be CV_32F");
-  Require(pred_depth.size() == gt_depth.size(), "prediction and GT depth maps differ in size");
-  Require(mask.empty() || (mask.type() == CV_8U && mask.size() == gt_depth.size()),
-          "the texture mask must be 8-bit and of the GT's size");
   Require(std::isfinite(scale) && scale > 0.0, "depth ranges: the scale must be > 0");
-  const cv::Rect crop = DepthCropRegion(options.crop, gt_depth.cols, gt_depth.rows);
-  for (int v = crop.y; v < crop.y + crop.height; ++v) {
-    const float* g = gt_depth.ptr<float>(v);
-    const float* p = pred_depth.ptr<float>(v);
-    const uint8_t* m = mask.empty() ? nullptr : mask.ptr<uint8_t>(v);
-    for (int u = crop.x; u < crop.x + crop.width; ++u) {
-      if (m != nullptr && m[u] == 0) continue;
-      if (!std::isfinite(g[u]) || g[u] <= options.min_depth || g[u] >= options.max_depth) continue;
-      if (g[u] < edges_.front() || g[u] >= edges_.back()) continue;
-      Require(!std::isnan(p[u]), "predicted depth is NaN at pixel (" + std::to_string(u) + ", " +
-                                     std::to_string(v) + ")");
-      const double pred = std::clamp(scale * static_cast<double>(p[u]), options.min_depth, options.max_depth);
-      const size_t range = std::upper_bound(edges_.begin(), edges_.end(), g[u]) - edges_.begin() - 1;
-      Accumulate(&ranges_[range], pred, g[u]);
-      Accumulate(&overall_, pred, g[u]);
-    }
-  }
+  ForEachEvaluatedPixel(pred_depth, gt_depth, mask, options, [&](double gt, double raw_pred) {
+    if (gt < edges_.front() || gt >= edges_.back()) return;
+    const double pred = ClampPredictedDepth(scale * raw_pred, options);
+    const size_t range = std::upper_bound(edges_.begin(), edges_.end(), gt) - edges_.begin() - 1;
+    Accumulate(&ranges_[range], pred, gt);
+    Accumulate(&overall_, pred, gt);
+  });
 }
 
 DepthRangeStats DepthRangeAccumulator::Finish(const Sums& sums, double min_depth, double max_depth) const {

@@ -27,6 +27,9 @@ struct DepthRangeStats {
 // OpenCV's unnormalised kernel, as DSO-style pixel selection sees edges) is >= min_gradient.
 cv::Mat TexturedPixelMask(const cv::Mat& grey, double min_gradient);
 
+// Throws dvso::Error unless edges are finite, >= 0, strictly increasing and at least two.
+void CheckDepthRangeEdges(const std::vector<double>& edges);
+
 // Accumulates pixels of many images into the ranges given by increasing edges (m, >= 0, at least two),
 // plus one overall range [edges.front(), edges.back()). The median is taken from a histogram of
 // log(d / d*) with bins of kLogRatioBin (a relative resolution of 0.05 %), so memory does not grow with
@@ -35,13 +38,13 @@ class DepthRangeAccumulator {
  public:
   static constexpr double kLogRatioBin = 1e-3;    // histogram bin width in log(d / d*)
   static constexpr double kLogRatioLimit = 5.0;   // |log(d / d*)| beyond this falls into the end bins
+  static constexpr int kHistogramBins = static_cast<int>(2 * kLogRatioLimit / kLogRatioBin + 0.5) + 1;
 
   explicit DepthRangeAccumulator(std::vector<double> edges);  // throws dvso::Error on invalid edges
 
   // pred_depth, gt_depth: CV_32F depths (m) of one image, equal size. mask: empty or CV_8U of that size
-  // (0 = skip the pixel). Uses ComputeDepthMetrics' rules: crop, GT strictly inside (min_depth,
-  // max_depth), predictions multiplied by `scale` (the image's median-scaling factor, 1 without) and
-  // clamped to [min_depth, max_depth].
+  // (0 = skip the pixel). The pixels of ComputeDepthMetrics (ForEachEvaluatedPixel), predictions
+  // multiplied by `scale` (the image's median-scaling factor, 1 without), then ClampPredictedDepth.
   void Add(const cv::Mat& pred_depth, const cv::Mat& gt_depth, const cv::Mat& mask,
            const DepthEvalOptions& options, double scale = 1.0);
 

@@ -9,6 +9,7 @@
 #include <limits>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <optional>
 #include <set>
 #include <sstream>
 
@@ -90,7 +91,7 @@ void DepthEvalOptions::Check() const {
           "eval-depth: a minimum image gradient needs the images (--images)");
   Require(image_dir.empty() || !range_edges.empty(),
           "eval-depth: images only select the pixels of the depth-range breakdown: give --ranges too");
-  if (!range_edges.empty()) DepthRangeAccumulator check_edges(range_edges);  // throws on invalid edges
+  if (!range_edges.empty()) CheckDepthRangeEdges(range_edges);
 }
 
 double KittiFocalLengthForWidth(int width) {
@@ -144,26 +145,39 @@ cv::Mat DisparityToDepth(const cv::Mat& disparity, double fxb, float nonpositive
   return depth;
 }
 
-DepthMetrics ComputeDepthMetrics(const cv::Mat& pred_depth, const cv::Mat& gt_depth,
-                                 const DepthEvalOptions& options) {
-  options.Check();
+void ForEachEvaluatedPixel(const cv::Mat& pred_depth, const cv::Mat& gt_depth, const cv::Mat& mask,
+                           const DepthEvalOptions& options, const std::function<void(double gt, double pred)>& visit) {
   Require(pred_depth.type() == CV_32F && gt_depth.type() == CV_32F, "depth maps must be CV_32F");
   Require(pred_depth.size() == gt_depth.size(), "prediction and GT depth maps differ in size");
+  Require(mask.empty() || (mask.type() == CV_8U && mask.size() == gt_depth.size()),
+          "the pixel mask must be 8-bit and of the GT's size");
   const cv::Rect crop = DepthCropRegion(options.crop, gt_depth.cols, gt_depth.rows);
-
-  // Mask: inside the crop, GT strictly inside (min_depth, max_depth).
-  std::vector<double> gt, pred;
   for (int v = crop.y; v < crop.y + crop.height; ++v) {
     const float* g = gt_depth.ptr<float>(v);
     const float* p = pred_depth.ptr<float>(v);
+    const uint8_t* m = mask.empty() ? nullptr : mask.ptr<uint8_t>(v);
     for (int u = crop.x; u < crop.x + crop.width; ++u) {
+      if (m != nullptr && m[u] == 0) continue;
       if (!std::isfinite(g[u]) || g[u] <= options.min_depth || g[u] >= options.max_depth) continue;
       Require(!std::isnan(p[u]), "predicted depth is NaN at pixel (" + std::to_string(u) + ", " +
                                      std::to_string(v) + ")");
-      gt.push_back(g[u]);
-      pred.push_back(p[u]);  // +inf (zero disparity) is clamped to max_depth below
+      visit(g[u], p[u]);  // +inf (zero disparity) is clamped to max_depth by ClampPredictedDepth
     }
   }
+}
+
+double ClampPredictedDepth(double depth, const DepthEvalOptions& options) {
+  return std::min(std::max(depth, options.min_depth), options.max_depth);
+}
+
+DepthMetrics ComputeDepthMetrics(const cv::Mat& pred_depth, const cv::Mat& gt_depth,
+                                 const DepthEvalOptions& options) {
+  options.Check();
+  std::vector<double> gt, pred;
+  ForEachEvaluatedPixel(pred_depth, gt_depth, cv::Mat(), options, [&](double g, double p) {
+    gt.push_back(g);
+    pred.push_back(p);
+  });
   DepthMetrics m;
   m.valid_pixels = static_cast<long>(gt.size());
   if (gt.empty()) {
@@ -180,7 +194,7 @@ DepthMetrics ComputeDepthMetrics(const cv::Mat& pred_depth, const cv::Mat& gt_de
   double abs_rel = 0, sq_rel = 0, sq = 0, sq_log = 0;
   long a1 = 0, a2 = 0, a3 = 0;
   for (size_t i = 0; i < gt.size(); ++i) {
-    const double d = std::min(std::max(pred[i], options.min_depth), options.max_depth);
+    const double d = ClampPredictedDepth(pred[i], options);
     const double g = gt[i];
     const double diff = d - g;
     abs_rel += std::abs(diff) / g;
@@ -189,9 +203,9 @@ DepthMetrics ComputeDepthMetrics(const cv::Mat& pred_depth, const cv::Mat& gt_de
     const double log_diff = std::log(d) - std::log(g);
     sq_log += log_diff * log_diff;
     const double ratio = std::max(d / g, g / d);
-    a1 += ratio < 1.25;
-    a2 += ratio < 1.25 * 1.25;
-    a3 += ratio < 1.25 * 1.25 * 1.25;
+    a1 += ratio < kDeltaThreshold;
+    a2 += ratio < kDeltaThreshold * kDeltaThreshold;
+    a3 += ratio < kDeltaThreshold * kDeltaThreshold * kDeltaThreshold;
   }
   const double n = static_cast<double>(gt.size());
   m.abs_rel = abs_rel / n;
@@ -261,8 +275,8 @@ DepthEvalResult EvaluateNamedMaps(const std::vector<std::string>& names, const s
                                   const std::function<cv::Mat(size_t, const cv::Mat&)>& prediction,
                                   const std::function<std::string(size_t)>& label, const DepthEvalOptions& options) {
   DepthEvalResult result;
-  const bool with_ranges = !options.range_edges.empty();
-  DepthRangeAccumulator ranges(with_ranges ? options.range_edges : std::vector<double>{0.0, 1.0});
+  std::optional<DepthRangeAccumulator> ranges;
+  if (!options.range_edges.empty()) ranges.emplace(options.range_edges);
   for (size_t i = 0; i < names.size(); ++i) {
     const std::string& name = names[i];
     const std::string gt_path = JoinPath(gt_dir, name);
@@ -293,7 +307,7 @@ DepthEvalResult EvaluateNamedMaps(const std::vector<std::string>& names, const s
     }
     result.names.push_back(name);
     result.per_image.push_back(metrics);
-    if (with_ranges) {
+    if (ranges) {
       cv::Mat mask;
       if (!options.image_dir.empty()) {
         const std::string image_path = JoinPath(options.image_dir, name);
@@ -304,7 +318,7 @@ DepthEvalResult EvaluateNamedMaps(const std::vector<std::string>& names, const s
         mask = TexturedPixelMask(grey, options.min_image_gradient);
       }
       try {
-        ranges.Add(pred_depth, gt_depth, mask, options, metrics.scale);
+        ranges->Add(pred_depth, gt_depth, mask, options, metrics.scale);
       } catch (const Error& e) {
         throw Error(label(i), e.what());
       }
@@ -313,9 +327,9 @@ DepthEvalResult EvaluateNamedMaps(const std::vector<std::string>& names, const s
   RequireFile(!result.per_image.empty(), gt_dir,
               "no ground-truth map has a valid pixel inside the crop and (min_depth, max_depth)");
   result.mean = AverageDepthMetrics(result.per_image);
-  if (with_ranges) {
-    result.ranges = ranges.Ranges();
-    result.all_ranges = ranges.Overall();
+  if (ranges) {
+    result.ranges = ranges->Ranges();
+    result.all_ranges = ranges->Overall();
   }
   return result;
 }

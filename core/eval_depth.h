@@ -5,6 +5,7 @@
 #pragma once
 
 #include <nlohmann/json.hpp>
+#include <functional>
 #include <opencv2/core.hpp>
 #include <string>
 #include <vector>
@@ -72,6 +73,17 @@ cv::Mat ResizePrediction(const cv::Mat& prediction, MapKind kind, cv::Size gt_si
 // depth = fxb / disparity. Non-positive disparities become `nonpositive_value`
 // (0 = invalid for GT; +inf = "infinitely far" for predictions, later clamped).
 cv::Mat DisparityToDepth(const cv::Mat& disparity, double fxb, float nonpositive_value);
+
+constexpr double kDeltaThreshold = 1.25;  // a1 = share with max(d / d*, d* / d) < 1.25 (a2, a3: its powers)
+
+// The pixels every depth statistic uses: inside the crop, mask != 0 (an empty mask keeps all), GT finite
+// and strictly inside (min_depth, max_depth). Calls visit(gt, pred) with the unclamped prediction;
+// throws dvso::Error naming the pixel when the prediction there is NaN. Maps: CV_32F, equal size.
+void ForEachEvaluatedPixel(const cv::Mat& pred_depth, const cv::Mat& gt_depth, const cv::Mat& mask,
+                           const DepthEvalOptions& options, const std::function<void(double gt, double pred)>& visit);
+
+// A prediction clamped to [min_depth, max_depth] (after any scaling), as monodepth2's evaluation does.
+double ClampPredictedDepth(double depth, const DepthEvalOptions& options);
 
 // Metrics of one image: pred_depth and gt_depth are CV_32F depths (m) of equal
 // size; GT pixels <= 0 or non-finite are invalid. Applies the crop, the GT
