@@ -66,6 +66,7 @@ void VisitNetwork(Map& m, NetworkOptions& o) {
   m.Get("residual_blocks", &o.residual_blocks);
   m.Get("normalization", &o.normalization);
   m.Get("initial_disparity", &o.initial_disparity);
+  m.Get("standardize_residual_inputs", &o.standardize_residual_inputs);
 }
 template <typename Map>
 void VisitLoss(Map& m, LossOptions& o) {

@@ -4,6 +4,14 @@
 
 namespace dvso::stacknet {
 
+namespace {
+// Typical street-image statistics of intensities in [0, 1]: the from-scratch encoders' input scale.
+constexpr double kImageMean = 0.45, kImageStd = 0.225;
+// Typical magnitudes of ResidualNet's other channels: disparity as a fraction of the width (~32 px of 640),
+// and the left-right reconstruction error |I - I_recons| in [0, 1].
+constexpr double kResidualDisparityScale = 0.05, kResidualErrorScale = 0.1;
+}  // namespace
+
 DisparityPyramid SplitLeftRight(const ScaleMaps& maps) {
   DisparityPyramid pyramid;
   for (const auto& m : maps.maps) {
@@ -25,8 +33,7 @@ SimpleNetImpl::SimpleNetImpl(const NetworkOptions& options) {
 }
 
 DisparityPyramid SimpleNetImpl::forward(const torch::Tensor& left_image) {
-  // Zero-mean, unit-scale input for the from-scratch encoder (typical street-image statistics).
-  constexpr double kImageMean = 0.45, kImageStd = 0.225;
+  // Zero-mean, unit-scale input for the from-scratch encoder.
   const torch::Tensor input = standardize_input_ ? (left_image - kImageMean) / kImageStd : left_image;
   return SplitLeftRight(decoder->forward(encoder->forward(input)));
 }
@@ -41,7 +48,17 @@ ResidualInputs MakeResidualInputs(const torch::Tensor& left_image, const torch::
   return in;
 }
 
-ResidualNetImpl::ResidualNetImpl(const NetworkOptions& options) : leaky_slope_(options.residual_leaky_slope) {
+torch::Tensor StandardizeResidualInputs(const torch::Tensor& stacked) {
+  // Channel layout of MakeResidualInputs: [I_left (3), disp (1), I_right_recons (3), I_left_recons (3), e_l (3)].
+  return torch::cat({(stacked.narrow(1, 0, 3) - kImageMean) / kImageStd,
+                     stacked.narrow(1, 3, 1) / kResidualDisparityScale,
+                     (stacked.narrow(1, 4, 6) - kImageMean) / kImageStd,
+                     stacked.narrow(1, 10, 3) / kResidualErrorScale},
+                    1);
+}
+
+ResidualNetImpl::ResidualNetImpl(const NetworkOptions& options)
+    : leaky_slope_(options.residual_leaky_slope), standardize_inputs_(options.standardize_residual_inputs) {
   const double w = options.width_multiplier;
   const int64_t input_channels = 3 + 1 + 3 + 3 + 3;
   const int64_t stem_channels = ScaledChannels(32, w);
@@ -79,7 +96,7 @@ ResidualNetImpl::ResidualNetImpl(const NetworkOptions& options) : leaky_slope_(o
 
 DisparityPyramid ResidualNetImpl::forward(const torch::Tensor& stacked_inputs) {
   EncoderFeatures f;
-  torch::Tensor stem_out = stem->forward(stacked_inputs);
+  torch::Tensor stem_out = stem->forward(standardize_inputs_ ? StandardizeResidualInputs(stacked_inputs) : stacked_inputs);
   if (stem_norm) stem_out = stem_norm->forward(stem_out);
   const torch::Tensor s0 = torch::leaky_relu(stem_out, leaky_slope_);
   const torch::Tensor s1 = stage1->forward(s0);

@@ -50,6 +50,9 @@ struct ResidualInputs {
 };
 ResidualInputs MakeResidualInputs(const torch::Tensor& left_image, const torch::Tensor& simple_left_0,
                                   const torch::Tensor& simple_right_0);
+// The stacked 13 channels on one scale (NetworkOptions::standardize_residual_inputs): the three images
+// (I - 0.45) / 0.225, the disparity (fraction of the width) / 0.05, the reconstruction error / 0.1.
+torch::Tensor StandardizeResidualInputs(const torch::Tensor& stacked);
 
 class ResidualNetImpl : public torch::nn::Module {
  public:
@@ -59,6 +62,7 @@ class ResidualNetImpl : public torch::nn::Module {
 
  private:
   double leaky_slope_;
+  bool standardize_inputs_;
   torch::nn::Conv2d stem{nullptr};
   torch::nn::GroupNorm stem_norm{nullptr};  // with normalization "group"
   torch::nn::Sequential stage1{nullptr}, stage2{nullptr}, stage3{nullptr}, stage4{nullptr};

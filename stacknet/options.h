@@ -25,6 +25,11 @@ struct NetworkOptions {
   // SimpleNet's output at initialisation, as a fraction of the width (0 = LibTorch's default bias 0, i.e.
   // max_disparity / 2). 0.02 ~ a street scene's median disparity (KITTI: ~25 px of 1242 at ~15 m).
   double initial_disparity = 0.02;
+  // ResidualNet's 13 input channels standardised to a common scale (images (I - 0.45) / 0.225, disparity / 0.05,
+  // reconstruction error / 0.1) instead of raw: raw, the disparity and error channels are ~10x smaller than the
+  // images, so with Adam (equal step sizes per weight) their first-layer weights need ~10x more steps to matter.
+  // false = the layout of every model exported before session 18.
+  bool standardize_residual_inputs = false;
   void Check() const;
 };
 

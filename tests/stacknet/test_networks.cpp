@@ -60,6 +60,40 @@ TEST(Networks, ResidualInputsFollowThePaper) {
   EXPECT_TRUE(torch::equal(in.stacked.narrow(1, 3, 1), d));
 }
 
+TEST(Networks, StandardizedResidualInputsFollowTheHandFormula) {
+  const torch::Tensor stacked = torch::arange(1, 14, torch::kFloat).mul(0.1).view({1, 13, 1, 1});
+  const torch::Tensor out = StandardizeResidualInputs(stacked).flatten();
+  ASSERT_EQ(out.size(0), 13);
+  for (int c = 0; c < 13; ++c) {
+    const double v = 0.1 * (c + 1);
+    double expected = (v - 0.45) / 0.225;  // the three images
+    if (c == 3) expected = v / 0.05;        // disparity
+    if (c >= 10) expected = v / 0.1;        // reconstruction error
+    EXPECT_NEAR(out[c].item<double>(), expected, 1e-5) << "channel " << c;
+  }
+}
+
+TEST(Networks, ResidualNetStandardizesItsInputsOnlyWhenAsked) {
+  NetworkOptions raw_options = testing::TinyNetwork();
+  NetworkOptions standardized_options = raw_options;
+  standardized_options.standardize_residual_inputs = true;
+  ResidualNet raw(raw_options), standardized(standardized_options);
+  {
+    torch::NoGradGuard no_grad;
+    torch::manual_seed(3);
+    auto raw_params = raw->parameters(), standardized_params = standardized->parameters();
+    ASSERT_EQ(raw_params.size(), standardized_params.size());
+    for (size_t i = 0; i < raw_params.size(); ++i) {
+      raw_params[i].uniform_(-0.2, 0.2);  // also the zero-initialised heads, so the outputs differ from 0
+      standardized_params[i].copy_(raw_params[i]);
+    }
+  }
+  const torch::Tensor x = torch::rand({1, 13, 32, 64}) * 0.5;
+  const torch::Tensor expected = raw->forward(StandardizeResidualInputs(x)).left[0];
+  EXPECT_TRUE(torch::allclose(standardized->forward(x).left[0], expected, 1e-4, 1e-5));
+  EXPECT_FALSE(torch::allclose(raw->forward(x).left[0], expected, 1e-3, 1e-4));
+}
+
 TEST(Networks, ResidualNetHasTwelveResidualBlocksAndStartsAtZero) {
   torch::manual_seed(1);
   const NetworkOptions options = testing::TinyNetwork();
