@@ -44,26 +44,33 @@ ResidualInputs MakeResidualInputs(const torch::Tensor& left_image, const torch::
   in.right_reconstruction = ReconstructRight(left_image, simple_right_0);
   in.left_reconstruction = ReconstructLeft(in.right_reconstruction, simple_left_0);
   in.error = (left_image - in.left_reconstruction).abs();
+  using L = ResidualInputLayout;
+  TORCH_CHECK(left_image.size(1) == L::kImageChannels && simple_left_0.size(1) == 1,
+              "ResidualNet inputs: expected a ", L::kImageChannels, "-channel image and a 1-channel disparity");
+  // Stacked in ResidualInputLayout's order.
   in.stacked = torch::cat({left_image, simple_left_0, in.right_reconstruction, in.left_reconstruction, in.error}, 1);
   return in;
 }
 
 torch::Tensor StandardizeResidualInputs(const torch::Tensor& stacked) {
-  // Channel layout of MakeResidualInputs: [I_left (3), disp (1), I_right_recons (3), I_left_recons (3), e_l (3)].
-  return torch::cat({(stacked.narrow(1, 0, 3) - kImageMean) / kImageStd,
-                     stacked.narrow(1, 3, 1) / kResidualDisparityScale,
-                     (stacked.narrow(1, 4, 6) - kImageMean) / kImageStd,
-                     stacked.narrow(1, 10, 3) / kResidualErrorScale},
+  using L = ResidualInputLayout;
+  TORCH_CHECK(stacked.size(1) == L::kChannels, "ResidualNet inputs: expected ", L::kChannels, " channels, got ",
+              stacked.size(1));
+  // The two reconstructions are adjacent, so one slice standardises both.
+  static_assert(L::kLeftReconstruction == L::kRightReconstruction + L::kImageChannels, "layout changed");
+  return torch::cat({(stacked.narrow(1, L::kLeftImage, L::kImageChannels) - kImageMean) / kImageStd,
+                     stacked.narrow(1, L::kDisparity, 1) / kResidualDisparityScale,
+                     (stacked.narrow(1, L::kRightReconstruction, 2 * L::kImageChannels) - kImageMean) / kImageStd,
+                     stacked.narrow(1, L::kError, L::kImageChannels) / kResidualErrorScale},
                     1);
 }
 
 ResidualNetImpl::ResidualNetImpl(const NetworkOptions& options)
     : leaky_slope_(options.residual_leaky_slope), standardize_inputs_(options.standardize_residual_inputs) {
   const double w = options.width_multiplier;
-  const int64_t input_channels = 3 + 1 + 3 + 3 + 3;
   const int64_t stem_channels = ScaledChannels(32, w);
   const bool group_norm = options.normalization == "group";
-  stem = register_module("stem", MakeConv(input_channels, stem_channels, 7, 2));
+  stem = register_module("stem", MakeConv(ResidualInputLayout::kChannels, stem_channels, 7, 2));
   if (group_norm) stem_norm = register_module("stem_norm", MakeGroupNorm(stem_channels));
   const int per_stage = options.residual_blocks / 4;  // paper: 12 blocks = 4 stages x 3
   int64_t channels = stem_channels;

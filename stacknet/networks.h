@@ -41,6 +41,18 @@ class SimpleNetImpl : public torch::nn::Module {
 };
 TORCH_MODULE(SimpleNet);
 
+// ResidualNet's 13 input channels in the order of paper 3.1: the one description of the layout, read by
+// MakeResidualInputs (stacking order), ResidualNet's stem (count) and StandardizeResidualInputs (slices).
+struct ResidualInputLayout {
+  static constexpr int64_t kImageChannels = 3;  // RGB, as SimpleNet's input
+  static constexpr int64_t kLeftImage = 0;                                            // I_left
+  static constexpr int64_t kDisparity = kLeftImage + kImageChannels;                  // disp_simple_0^left (1)
+  static constexpr int64_t kRightReconstruction = kDisparity + 1;                     // I_right_recons
+  static constexpr int64_t kLeftReconstruction = kRightReconstruction + kImageChannels;  // I_left_recons
+  static constexpr int64_t kError = kLeftReconstruction + kImageChannels;             // e_l
+  static constexpr int64_t kChannels = kError + kImageChannels;                       // 13
+};
+
 // The 13-channel input of ResidualNet, exactly as listed in paper 3.1.
 struct ResidualInputs {
   torch::Tensor right_reconstruction;  // I_right_recons = I_left warped with disp_simple_0^right

@@ -58,6 +58,20 @@ TEST(Networks, ResidualInputsFollowThePaper) {
   EXPECT_NEAR(in.error[0][0][0][0].item<double>(), 1.0, 1e-4);
   // Channel 3 is disp_simple_0^left.
   EXPECT_TRUE(torch::equal(in.stacked.narrow(1, 3, 1), d));
+  // The layout constants name the same slices as the stacking order.
+  using L = ResidualInputLayout;
+  EXPECT_EQ(L::kChannels, 13);
+  EXPECT_TRUE(torch::equal(in.stacked.narrow(1, L::kLeftImage, 3), image));
+  EXPECT_TRUE(torch::equal(in.stacked.narrow(1, L::kDisparity, 1), d));
+  EXPECT_TRUE(torch::equal(in.stacked.narrow(1, L::kRightReconstruction, 3), in.right_reconstruction));
+  EXPECT_TRUE(torch::equal(in.stacked.narrow(1, L::kLeftReconstruction, 3), in.left_reconstruction));
+  EXPECT_TRUE(torch::equal(in.stacked.narrow(1, L::kError, 3), in.error));
+}
+
+TEST(Networks, ResidualInputsRejectAWrongChannelCount) {
+  EXPECT_THROW(StandardizeResidualInputs(torch::zeros({1, 12, 2, 2})), c10::Error);
+  EXPECT_THROW(MakeResidualInputs(torch::zeros({1, 1, 2, 8}), torch::zeros({1, 1, 2, 8}), torch::zeros({1, 1, 2, 8})),
+               c10::Error);
 }
 
 TEST(Networks, StandardizedResidualInputsFollowTheHandFormula) {
