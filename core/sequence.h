@@ -57,20 +57,22 @@ class SequenceReader {
   virtual std::string FrameName(int index) const = 0;
 };
 
-// Which stereo pair of a KITTI raw drive is the sequence's left/right pair: the grey cameras
-// 00/01 (odometry and labels; the colour pair is still loaded beside them for the network) or
-// the colour cameras 02/03 (read as grey for the odometry, as colour for the network).
+// Which stereo pair of a KITTI layout (raw drive or odometry folder) is the sequence's left/right pair:
+// the grey cameras 00/01 (odometry and labels) or the colour cameras 02/03 (read as grey for the odometry,
+// as colour for the network). Colour images are offered beside the grey pair (has_color) only when they
+// were taken from the grey cameras' centres (the simulator's sequences): on KITTI they are another
+// viewpoint 6 cm away, and a map or label made on one pair is misplaced by ~12 % of its disparity on the other.
 enum class CameraPair { kGrey, kColour };
 // "grey" | "colour" (also "gray", "color"); throws dvso::Error otherwise.
 CameraPair ParseCameraPair(const std::string& name);
 
 // Opens a sequence, detecting the layout: KITTI (calib.txt), EuRoC (mav0/ or
 // cam0/data.csv), or a monocular folder (needs camera_file). `pair` chooses the
-// cameras of a KITTI raw drive; kColour on any other layout is an error. Throws dvso::Error.
+// cameras of a KITTI layout; kColour on any other layout is an error. Throws dvso::Error.
 std::unique_ptr<SequenceReader> OpenSequence(const std::string& path, const std::string& camera_file = "",
                                              CameraPair pair = CameraPair::kGrey);
 
-std::unique_ptr<SequenceReader> OpenKittiSequence(const std::string& path);
+std::unique_ptr<SequenceReader> OpenKittiSequence(const std::string& path, CameraPair pair = CameraPair::kGrey);
 // KITTI raw drive, _sync or _extract (DRIVE/image_0X/data/, calibration in DRIVE or its parent).
 std::unique_ptr<SequenceReader> OpenKittiRawSequence(const std::string& path, CameraPair pair = CameraPair::kGrey);
 bool IsKittiRawDrive(const std::string& path);
@@ -81,9 +83,14 @@ std::string FormatKittiRawTimestamp(double epoch_seconds);
 std::unique_ptr<SequenceReader> OpenEurocSequence(const std::string& path);
 std::unique_ptr<SequenceReader> OpenImageFolder(const std::string& path, const std::string& camera_file);
 
-// Parses a KITTI calib.txt: P0 gives the intrinsics, P1 the baseline
-// (baseline = -P1[0][3] / P1[0][0]). Image size is taken from image_0/000000.png by the caller.
-StereoCamera ReadKittiCalibration(const std::string& calib_path, int width, int height);
+// Parses a KITTI calib.txt for one stereo pair: the grey pair takes its intrinsics from P0 and its
+// baseline from P1 (baseline = -(P1[0][3] - P0[0][3]) / P1[0][0]), the colour pair from P2 and P3 the
+// same way (on KITTI 0.532 m against the grey 0.537 m). Image size is taken from the images by the caller.
+StereoCamera ReadKittiCalibration(const std::string& calib_path, int width, int height,
+                                  CameraPair pair = CameraPair::kGrey);
+// Whether calib.txt's colour cameras (P2, P3) are the grey ones (P0, P1) in colour, as in the simulator's
+// sequences, rather than another viewpoint (KITTI: 6 cm beside them).
+bool KittiColourMatchesGrey(const std::string& calib_path);
 void WriteKittiCalibration(const std::string& calib_path, const StereoCamera& camera);
 
 }  // namespace dvso

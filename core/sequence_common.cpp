@@ -1,6 +1,7 @@
 #include "core/sequence_common.h"
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -58,6 +59,17 @@ std::vector<std::string> ListImages(const std::string& directory) {
   }
   std::sort(files.begin(), files.end());
   return files;
+}
+
+bool SameRectifiedCamera(const std::vector<double>& p, const std::vector<double>& q) {
+  if (p.size() != 12 || q.size() != 12) return false;
+  // Entries are pixels (K) and pixel-metres (f t): a thousandth of a pixel / of f x 1 mm is "equal"
+  // for numbers printed with 6+ significant digits.
+  const double scale = std::max({std::abs(p[0]), std::abs(q[0]), 1.0});
+  for (size_t i = 0; i < 12; ++i) {
+    if (std::abs(p[i] - q[i]) > 1e-6 * scale + 1e-3) return false;
+  }
+  return true;
 }
 
 }  // namespace dvso::internal

@@ -15,5 +15,9 @@ cv::Mat LoadGreyImage(const std::string& path, cv::Size expected = {});
 cv::Mat LoadColorImage(const std::string& path, cv::Size expected = {});
 // Sorted list of image files (png, jpg, jpeg, pgm, bmp) in a directory.
 std::vector<std::string> ListImages(const std::string& directory);
+// Whether two rectified 3x4 projection matrices (row-major, 12 numbers, KITTI's P = K [I | t]) describe the
+// same camera: equal intrinsics and centre. On KITTI the colour cameras sit ~6 cm beside the grey ones
+// (P2[0][3] != P0[0][3]), so their images are another viewpoint; our simulator renders colour at the grey centres.
+bool SameRectifiedCamera(const std::vector<double>& p, const std::vector<double>& q);
 
 }  // namespace dvso::internal

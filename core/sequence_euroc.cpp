@@ -245,8 +245,9 @@ std::unique_ptr<SequenceReader> OpenSequence(const std::string& path, const std:
                                              CameraPair pair) {
   RequireFile(fs::is_directory(path), path, "sequence directory does not exist");
   if (IsKittiRawDrive(path)) return OpenKittiRawSequence(path, pair);
-  RequireFile(pair == CameraPair::kGrey, path, "--cameras colour needs a KITTI raw drive (image_02/ image_03/)");
-  if (fs::is_regular_file(JoinPath(path, "calib.txt"))) return OpenKittiSequence(path);
+  if (fs::is_regular_file(JoinPath(path, "calib.txt"))) return OpenKittiSequence(path, pair);
+  RequireFile(pair == CameraPair::kGrey, path,
+              "--cameras colour needs a KITTI layout (image_2/ image_3/ of an odometry folder, image_02/ image_03/ of a raw drive)");
   if (fs::is_directory(JoinPath(path, "mav0")) || fs::is_regular_file(JoinPath(path, "cam0/data.csv"))) {
     return OpenEurocSequence(path);
   }

@@ -17,7 +17,10 @@ namespace dvso {
 
 namespace fs = std::filesystem;
 
-StereoCamera ReadKittiCalibration(const std::string& calib_path, int width, int height) {
+namespace {
+
+// Every "NAME: numbers" line of a calib.txt; P0..P3 must have 12 numbers.
+std::map<std::string, std::vector<double>> ReadCalibrationRows(const std::string& calib_path) {
   std::ifstream in(calib_path);
   RequireFile(in.good(), calib_path, "cannot open calibration file");
   std::map<std::string, std::vector<double>> rows;
@@ -47,22 +50,33 @@ StereoCamera ReadKittiCalibration(const std::string& calib_path, int width, int 
     }
     rows[name] = v;
   }
-  RequireFile(rows.count("P0") == 1, calib_path, "missing P0 line");
-  const auto& p0 = rows["P0"];
+  return rows;
+}
+
+}  // namespace
+
+StereoCamera ReadKittiCalibration(const std::string& calib_path, int width, int height, CameraPair pair) {
+  std::map<std::string, std::vector<double>> rows = ReadCalibrationRows(calib_path);
+  const bool colour = pair == CameraPair::kColour;
+  const std::string left_key = colour ? "P2" : "P0", right_key = colour ? "P3" : "P1";
+  RequireFile(rows.count(left_key) == 1, calib_path,
+              "missing " + left_key + " line" + (colour ? " (the colour pair image_2/image_3 needs P2 and P3)" : ""));
+  const auto& p_left = rows[left_key];
   StereoCamera camera;
-  camera.left.fx = p0[0];
-  camera.left.fy = p0[5];
-  camera.left.cx = p0[2];
-  camera.left.cy = p0[6];
+  camera.left.fx = p_left[0];
+  camera.left.fy = p_left[5];
+  camera.left.cx = p_left[2];
+  camera.left.cy = p_left[6];
   camera.left.width = width;
   camera.left.height = height;
   camera.baseline = 0.0;
-  if (rows.count("P1") == 1) {
-    const auto& p1 = rows["P1"];
-    RequireFile(p1[0] > 0, calib_path, "P1 has a non-positive focal length");
-    // P1 = K [I | -b e_x] (relative to camera 0), so P1[0][3] = -fx * b.
-    camera.baseline = -(p1[3] - p0[3]) / p1[0];
-    RequireFile(camera.baseline > 0, calib_path, "P1 gives a non-positive stereo baseline");
+  if (rows.count(right_key) == 1) {
+    const auto& p_right = rows[right_key];
+    RequireFile(p_right[0] > 0, calib_path, right_key + " has a non-positive focal length");
+    // P_X = K [I | t_X] in rectified camera 0 with t_right - t_left = -b e_x, so
+    // P_right[0][3] - P_left[0][3] = -fx * b.
+    camera.baseline = -(p_right[3] - p_left[3]) / p_right[0];
+    RequireFile(camera.baseline > 0, calib_path, right_key + " gives a non-positive stereo baseline");
   }
   try {
     camera.left.Check();
@@ -70,6 +84,13 @@ StereoCamera ReadKittiCalibration(const std::string& calib_path, int width, int 
     throw Error(calib_path, e.what());
   }
   return camera;
+}
+
+bool KittiColourMatchesGrey(const std::string& calib_path) {
+  std::map<std::string, std::vector<double>> rows = ReadCalibrationRows(calib_path);
+  if (!rows.count("P0") || !rows.count("P2") || !internal::SameRectifiedCamera(rows["P0"], rows["P2"])) return false;
+  // A right colour camera, when given, must be the right grey one too.
+  return !rows.count("P3") || (rows.count("P1") && internal::SameRectifiedCamera(rows["P1"], rows["P3"]));
 }
 
 void WriteKittiCalibration(const std::string& calib_path, const StereoCamera& camera) {
@@ -91,23 +112,26 @@ namespace {
 
 class KittiSequence : public SequenceReader {
  public:
-  explicit KittiSequence(const std::string& root) : root_(root) {
+  KittiSequence(const std::string& root, CameraPair pair) : root_(root) {
     const std::string calib = JoinPath(root, "calib.txt");
     RequireFile(fs::is_regular_file(calib), calib, "missing calibration file (KITTI layout needs calib.txt)");
-    // Grey images are preferred; colour-only folders (image_2/image_3) are converted.
-    if (fs::is_directory(JoinPath(root, "image_0"))) {
-      left_dir_ = JoinPath(root, "image_0");
-      right_dir_ = JoinPath(root, "image_1");
-    } else {
-      left_dir_ = JoinPath(root, "image_2");
-      right_dir_ = JoinPath(root, "image_3");
-    }
+    const bool has_grey = fs::is_directory(JoinPath(root, "image_0"));
+    const bool has_colour = fs::is_directory(JoinPath(root, "image_2"));
+    // The grey pair unless the colour one is asked for or is all there is (colour-only download):
+    // then image_2/image_3 are read as grey for the odometry, with their own calibration P2/P3.
+    colour_is_left_ = pair == CameraPair::kColour || !has_grey;
+    RequireFile(!colour_is_left_ || has_colour, JoinPath(root, "image_2"),
+                has_grey ? "no colour camera (--cameras colour needs image_2/)" : "no image_0/ or image_2/ folder");
+    left_dir_ = JoinPath(root, colour_is_left_ ? "image_2" : "image_0");
+    right_dir_ = JoinPath(root, colour_is_left_ ? "image_3" : "image_1");
     files_ = internal::ListImages(left_dir_);
     RequireFile(!files_.empty(), left_dir_, "no images found");
     const cv::Mat first = internal::LoadGreyImage(files_[0]);
-    camera_ = ReadKittiCalibration(calib, first.cols, first.rows);
+    camera_ = ReadKittiCalibration(calib, first.cols, first.rows,
+                                   colour_is_left_ ? CameraPair::kColour : CameraPair::kGrey);
     stereo_ = camera_.baseline > 0 && fs::is_directory(right_dir_);
-    color_ = fs::is_directory(JoinPath(root, "image_2"));
+    // Colour beside the grey pair only when it was taken from the same centres (CameraPair).
+    color_ = colour_is_left_ || (has_colour && KittiColourMatchesGrey(calib));
     const std::string times = JoinPath(root, "times.txt");
     if (fs::is_regular_file(times)) {
       timestamps_ = ReadTimes(times);
@@ -149,14 +173,14 @@ class KittiSequence : public SequenceReader {
   std::string root_, left_dir_, right_dir_;
   std::vector<std::string> files_;
   StereoCamera camera_;
-  bool stereo_ = false, color_ = false;
+  bool stereo_ = false, color_ = false, colour_is_left_ = false;
   std::vector<double> timestamps_;
 };
 
 }  // namespace
 
-std::unique_ptr<SequenceReader> OpenKittiSequence(const std::string& path) {
-  return std::make_unique<KittiSequence>(path);
+std::unique_ptr<SequenceReader> OpenKittiSequence(const std::string& path, CameraPair pair) {
+  return std::make_unique<KittiSequence>(path, pair);
 }
 
 }  // namespace dvso

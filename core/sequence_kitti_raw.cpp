@@ -154,9 +154,16 @@ class KittiRawSequence : public SequenceReader {
       RequireFile(camera_.baseline > 0, cam_to_cam, "P_rect gives a non-positive stereo baseline");
       right = LoadCamera(right_id, calibration);
     }
-    // The colour pair beside the grey one (for the network), paired with the grey frames like the right camera.
+    // The colour pair beside the grey one (for the network), paired with the grey frames like the right camera,
+    // only when it was taken from the grey cameras' centres (CameraPair; the simulator's drives): on KITTI
+    // cameras 02/03 sit ~6 cm beside 00/01, another viewpoint than the grey pair's maps and labels.
+    auto projection = [&](int id) {
+      return CalibrationEntry(calibration.entries, "P_rect_0" + std::to_string(id), 12, cam_to_cam);
+    };
     RawCameraFiles colour_left, colour_right;
-    color_ = colour_is_left_ || fs::is_directory(Camera(2));
+    color_ = colour_is_left_ ||
+             (fs::is_directory(Camera(2)) && internal::SameRectifiedCamera(projection(0), projection(2)) &&
+              (!stereo_ || !fs::is_directory(Camera(3)) || internal::SameRectifiedCamera(projection(1), projection(3))));
     if (color_ && !colour_is_left_) {
       colour_left = LoadCamera(2, calibration);
       if (fs::is_directory(Camera(3))) colour_right = LoadCamera(3, calibration);

@@ -97,7 +97,7 @@ void AddLabelsCommand(CLI::App& app) {
   cmd->add_flag("--right-labels", args->right_labels, "Also label the right image (OUT/right/%06d.png)");
   cmd->add_option("--gt-disparity-right", args->gt_disparity_right, "GT disparity folder of the right image (e.g. disp_1)");
   cmd->add_option("--gt-subdir-right", args->gt_subdir_right, "Batch: right GT disparity subfolder (e.g. disp_1)");
-  cmd->add_option("--cameras", args->cameras, "KITTI raw drives: the stereo pair to label, grey (00/01) or colour (02/03)")
+  cmd->add_option("--cameras", args->cameras, "KITTI layouts (raw drive, odometry folder): the stereo pair to label, grey (00/01) or colour (02/03)")
       ->capture_default_str();
   cmd->add_option("--first", args->first, "First frame index");
   cmd->add_option("--count", args->count, "Number of frames (-1 = all)");

@@ -99,7 +99,7 @@ void AddOdometryCommand(CLI::App& app) {
   cmd->add_option("--first", args->first, "First frame index");
   cmd->add_option("--count", args->count, "Number of frames (-1 = all)");
   cmd->add_option("--camera", args->camera_file, "DSO camera file (image-folder sequences only)");
-  cmd->add_option("--cameras", args->cameras, "KITTI raw drives: grey (00/01) or colour (02/03, read as grey) pair")
+  cmd->add_option("--cameras", args->cameras, "KITTI layouts (raw drive, odometry folder): grey (00/01) or colour (02/03, read as grey) pair")
       ->capture_default_str();
   cmd->add_flag("--ply", args->ply, "Also write points.ply (marginalised points)");
   cmd->add_flag("--no-progress", args->no_progress, "No progress bar");

@@ -67,7 +67,7 @@ void AddExperimentOptions(CLI::App* cmd, ExperimentArgs* args, bool many_sequenc
   cmd->add_option("--config", args->config, "Odometry YAML options (strict keys)");
   cmd->add_option("--preset", args->preset, "default | fast")->check(CLI::IsMember({"default", "fast"}));
   cmd->add_option("--camera", args->camera_file, "DSO camera file (image-folder sequences only)");
-  cmd->add_option("--cameras", args->cameras, "KITTI raw drives: grey (00/01) or colour (02/03, read as grey) pair")
+  cmd->add_option("--cameras", args->cameras, "KITTI layouts (raw drive, odometry folder): grey (00/01) or colour (02/03, read as grey) pair")
       ->capture_default_str();
   cmd->add_flag("--json", args->json, "Print exactly one JSON object on stdout");
   AddPredictionOptions(cmd, &args->predictions, kExperimentPredictionTiming);

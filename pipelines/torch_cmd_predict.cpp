@@ -26,7 +26,7 @@ namespace {
 namespace fs = std::filesystem;
 
 struct PredictArgs {
-  std::string model, images, sequence, out, cameras = "colour";
+  std::string model, images, sequence, out, cameras;  // cameras "": per layout (see --cameras)
   stacknet::PredictorOptions options;
   bool no_color = false;
 };
@@ -46,8 +46,11 @@ void RunPredict(const PredictArgs& args) {
   std::unique_ptr<SequenceReader> sequence;
   std::vector<std::string> files;
   if (!args.sequence.empty()) {
-    // The network sees the colour pair of a KITTI raw drive (it was trained on it); other layouts have one pair.
-    const CameraPair pair = IsKittiRawDrive(args.sequence) ? ParseCameraPair(args.cameras) : CameraPair::kGrey;
+    // By default the network sees the colour pair of a KITTI raw drive (it was trained on it) and the pair
+    // `odometry` reads by default elsewhere, so that the maps sit on the pixels the odometry tracks.
+    const CameraPair pair = !args.cameras.empty()          ? ParseCameraPair(args.cameras)
+                            : IsKittiRawDrive(args.sequence) ? CameraPair::kColour
+                                                             : CameraPair::kGrey;
     sequence = OpenSequence(args.sequence, "", pair);
   } else {
     RequireFile(fs::is_directory(args.images), args.images, "image folder not found");
@@ -133,9 +136,10 @@ void AddPredictCommand(CLI::App& app) {
                   "Sequence folder (KITTI odometry layout / dvso simulate output / KITTI raw drive); outputs are "
                   "named like its frames");
   cmd->add_option("--cameras", args->cameras,
-                  "KITTI raw drives: colour (02/03, what the network trained on) or grey (00/01) pair; odometry "
-                  "using these predictions must read the same pair (odometry --cameras)")
-      ->capture_default_str();
+                  "KITTI layouts: colour (02/03) or grey (00/01) pair; default colour on raw drives (what the network "
+                  "trained on), grey on odometry folders (what odometry reads by default; colour images are used when "
+                  "they come from the grey cameras, as in simulated sequences). Odometry using these predictions must "
+                  "read the same pair (odometry --cameras)");
   cmd->add_option("--out", args->out, "Output folder")->required();
   cmd->add_flag("--post-process", args->options.post_process, "Godard's flip-and-blend post-processing (left)");
   cmd->add_option("--device", args->options.device, "auto, cpu or cuda");

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "core/camera.h"
 #include "core/config_yaml.h"
@@ -258,6 +259,66 @@ TEST(SequenceReader, KittiErrorsNameTheFile) {
   WriteText(empty + "/calib.txt", "P0: 1 0 1 0 0 1 1 0 0 0 1 0\n");
   EXPECT_THROW(OpenSequence(empty), Error);
   EXPECT_THROW(OpenSequence(TempDir("nolayout")), Error);
+}
+
+// KITTI's calib.txt: every P = K [I | t] in rectified camera 0. Made-up numbers with the real layout: the
+// grey pair 0.54 m apart, the colour cameras 6 cm beside them and 0.53 m apart.
+constexpr const char* kCalibColourBeside =
+    "P0: 700 0 30 0 0 700 20 0 0 0 1 0\n"
+    "P1: 700 0 30 -378 0 700 20 0 0 0 1 0\n"
+    "P2: 700 0 30 42 0 700 20 0 0 0 1 0\n"
+    "P3: 700 0 30 -329 0 700 20 0 0 0 1 0\n";
+
+TEST(SequenceReader, KittiCalibrationGivesEachPairItsOwnBaseline) {
+  const std::string root = TempDir("calib_pairs");
+  WriteText(root + "/calib.txt", kCalibColourBeside);
+  EXPECT_NEAR(ReadKittiCalibration(root + "/calib.txt", 60, 40).baseline, 378.0 / 700, 1e-12);
+  EXPECT_NEAR(ReadKittiCalibration(root + "/calib.txt", 60, 40, CameraPair::kColour).baseline, (42.0 + 329) / 700,
+              1e-12);
+  EXPECT_FALSE(KittiColourMatchesGrey(root + "/calib.txt"));
+  // The simulator's calib.txt: the colour cameras are the grey ones.
+  StereoCamera cam;
+  cam.left = PinholeCamera{700.0, 700.0, 30.0, 20.0, 60, 40};
+  cam.baseline = 0.54;
+  WriteKittiCalibration(root + "/calib.txt", cam);
+  EXPECT_TRUE(KittiColourMatchesGrey(root + "/calib.txt"));
+  WriteText(root + "/calib.txt", "P0: 700 0 30 0 0 700 20 0 0 0 1 0\nP1: 700 0 30 -378 0 700 20 0 0 0 1 0\n");
+  EXPECT_THROW(ReadKittiCalibration(root + "/calib.txt", 60, 40, CameraPair::kColour), Error);
+}
+
+TEST(SequenceReader, KittiColourCamerasBesideTheGreyOnesAreAnotherPair) {
+  // image_0..3 as in a full KITTI odometry download: the grey pair by default, without the colour images
+  // (another viewpoint), and the colour pair with its own calibration on request.
+  const std::string root = MakeKittiSequence("kitti_four", 2, 60, 40);
+  WriteText(root + "/calib.txt", kCalibColourBeside);
+  fs::create_directories(root + "/image_2");
+  fs::create_directories(root + "/image_3");
+  for (int i = 0; i < 2; ++i) {
+    cv::Mat colour;
+    cv::cvtColor(RandomImage(60, 40, 200 + i), colour, cv::COLOR_GRAY2BGR);
+    cv::imwrite(root + "/image_2/" + FrameFileName(i, ".png"), colour);
+    cv::imwrite(root + "/image_3/" + FrameFileName(i, ".png"), colour);
+  }
+  SequenceReadOptions with_colour;
+  with_colour.load_color = true;
+  const auto grey = OpenSequence(root);
+  EXPECT_NEAR(grey->camera().baseline, 0.54, 1e-12);
+  EXPECT_FALSE(grey->has_color());
+  EXPECT_TRUE(grey->Read(1, with_colour).left_color.empty());
+  EXPECT_EQ(cv::norm(grey->Read(1).left, RandomImage(60, 40, 1), cv::NORM_INF), 0.0);
+  const auto colour = OpenSequence(root, "", CameraPair::kColour);
+  EXPECT_NEAR(colour->camera().baseline, 0.53, 1e-12);
+  EXPECT_TRUE(colour->has_color());
+  const StereoFrame f = colour->Read(1, with_colour);
+  EXPECT_EQ(cv::norm(f.left, RandomImage(60, 40, 201), cv::NORM_INF), 0.0);
+  EXPECT_EQ(f.left_color.type(), CV_8UC3);
+  // A colour-only download (no image_0/image_1) is read as the colour pair with P2/P3.
+  fs::remove_all(root + "/image_0");
+  fs::remove_all(root + "/image_1");
+  EXPECT_NEAR(OpenSequence(root)->camera().baseline, 0.53, 1e-12);
+  // On a layout without a colour pair, colour is an error naming it.
+  const std::string grey_only = MakeKittiSequence("kitti_grey_only", 1, 16, 8);
+  EXPECT_THROW(OpenSequence(grey_only, "", CameraPair::kColour), Error);
 }
 
 TEST(SequenceReader, EurocIsRectifiedWithMetricBaseline) {

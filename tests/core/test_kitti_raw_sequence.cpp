@@ -9,6 +9,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -137,8 +138,49 @@ TEST_F(SyncDrive, ReadsLikeTheOdometryLayout) {
   const StereoFrame c = colour_pair->Read(5, colour);
   EXPECT_EQ(c.left.type(), CV_8UC1);
   EXPECT_EQ(c.left_color.type(), CV_8UC3);
-  // --cameras colour on a layout without a colour pair choice is an error naming the sequence.
-  EXPECT_THROW(OpenSequence(Seq().string(), "", CameraPair::kColour), Error);
+  // The odometry layout's colour pair (image_2/image_3, P2/P3) reads the same colour images.
+  const std::unique_ptr<SequenceReader> layout_colour = OpenSequence(Seq().string(), "", CameraPair::kColour);
+  EXPECT_NEAR(layout_colour->camera().baseline, raw->camera().baseline, 1e-9);
+  EXPECT_EQ(cv::norm(layout_colour->Read(5, colour).left_color, c.left_color, cv::NORM_INF), 0.0);
+}
+
+TEST_F(SyncDrive, ColourCamerasBesideTheGreyOnesAreNotTheGreyPairsColour) {
+  // KITTI's colour cameras sit ~6 cm beside the grey ones: their images are another viewpoint, so the grey
+  // pair must not offer them as its colour (a map predicted on them is misplaced on the grey pixels).
+  const fs::path copy = Dir() / "colour_beside" / "2011_09_26_drive_0001_sync";
+  fs::create_directories(copy.parent_path());
+  fs::copy(Drive(), copy, fs::copy_options::recursive);
+  for (const char* file : {"calib_velo_to_cam.txt", "calib_imu_to_velo.txt"}) {
+    fs::copy_file(Drive().parent_path() / file, copy.parent_path() / file);
+  }
+  std::ifstream in((Drive().parent_path() / "calib_cam_to_cam.txt").string());
+  std::ofstream out((copy.parent_path() / "calib_cam_to_cam.txt").string());
+  std::string line;
+  int moved = 0;
+  while (std::getline(in, line)) {
+    if (line.rfind("P_rect_02:", 0) == 0 || line.rfind("P_rect_03:", 0) == 0) {
+      std::istringstream values(line.substr(10));
+      std::vector<double> p(12);
+      for (double& v : p) values >> v;
+      p[3] += p[0] * 0.06;  // the camera centre 6 cm to the left
+      line = line.substr(0, 10);
+      for (double v : p) line += " " + std::to_string(v);
+      ++moved;
+    }
+    out << line << "\n";
+  }
+  out.close();
+  ASSERT_EQ(moved, 2);
+  SequenceReadOptions colour;
+  colour.load_color = true;
+  const std::unique_ptr<SequenceReader> grey = OpenSequence(copy.string());
+  EXPECT_FALSE(grey->has_color());
+  EXPECT_TRUE(grey->Read(3, colour).left_color.empty());
+  const std::unique_ptr<SequenceReader> colour_pair = OpenSequence(copy.string(), "", CameraPair::kColour);
+  EXPECT_TRUE(colour_pair->has_color());
+  EXPECT_FALSE(colour_pair->Read(3, colour).left_color.empty());
+  // The unmoved drive offers its colour beside the grey pair (the simulator renders it from the same centres).
+  EXPECT_TRUE(OpenSequence(Drive().string())->has_color());
 }
 
 TEST_F(SyncDrive, FrameWithoutItsRightImageIsSkippedNotMispaired) {
@@ -287,10 +329,16 @@ TEST_F(SyncDrive, ColourPairRunsTheOdometry) {
   ASSERT_FALSE(grey.empty() || colour.empty());
   ASSERT_EQ(grey.size(), colour.size());
   EXPECT_LT(FinalGap(grey, colour), 0.02 * grey.PathLength());
+  // A layout without colour cameras: a one-line error naming what is missing.
+  const fs::path grey_only = Dir() / "grey_only";
+  fs::create_directories(grey_only / "image_0");
+  fs::copy_file(Seq() / "calib.txt", grey_only / "calib.txt", fs::copy_options::overwrite_existing);
+  fs::copy_file(Seq() / "image_0" / "000000.png", grey_only / "image_0" / "000000.png",
+                fs::copy_options::overwrite_existing);
   const testing::CliRun wrong = testing::RunDvso("odometry --no-progress --mode stereo --cameras colour --sequence " +
-                                                 Seq().string() + " --out " + (Dir() / "wrong").string());
+                                                 grey_only.string() + " --out " + (Dir() / "wrong").string());
   EXPECT_NE(wrong.exit_code, 0);
-  EXPECT_NE(wrong.out.find("raw drive"), std::string::npos) << wrong.out;
+  EXPECT_NE(wrong.out.find("image_2"), std::string::npos) << wrong.out;
 }
 
 TEST(KittiRawSequence, ExtractDriveIsRectifiedOnReadAndPairedByTimestamp) {
