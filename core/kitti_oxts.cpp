@@ -107,4 +107,13 @@ std::vector<Eigen::Isometry3d> OxtsCameraPoses(const std::string& drive_dir, int
   return poses;
 }
 
+size_t NearestTimestamp(const std::vector<double>& times, double t) {
+  Require(!times.empty(), "no timestamps to pair with");
+  size_t best = 0;
+  for (size_t k = 1; k < times.size(); ++k) {
+    if (std::abs(times[k] - t) < std::abs(times[best] - t)) best = k;
+  }
+  return best;
+}
+
 }  // namespace dvso

@@ -52,4 +52,11 @@ Eigen::Isometry3d CameraFromImu(const std::string& calib_dir, int camera);
 // its parent (the date folder of the raw layout).
 std::vector<Eigen::Isometry3d> OxtsCameraPoses(const std::string& drive_dir, int camera);
 
+// Extract drives: a frame whose nearest OXTS packet (100 Hz, so normally <= 5 ms away) is farther than this,
+// half a 10 Hz camera period, gets a warning (real recordings have gaps in the GPS/IMU stream).
+constexpr double kMaxOxtsFrameGap = 0.05;  // s
+// Index of the time in `times` nearest to `t` (ties: the first); `times` need not be sorted (the OXTS
+// timestamps of real drives jump). Throws dvso::Error when `times` is empty.
+size_t NearestTimestamp(const std::vector<double>& times, double t);
+
 }  // namespace dvso

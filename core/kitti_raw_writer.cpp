@@ -250,6 +250,7 @@ void KittiRawDriveOptions::Check() const {
   Require(right_dropped.empty() || extract, "raw drive: only extract drives drop frames (sync drives are synchronised)");
   Require(right_trigger_offset >= 0.0 && right_trigger_offset < 0.005,
           "raw drive: right_trigger_offset must be in [0, 5 ms) (the reader pairs within 10 ms)");
+  Require(oxts_packets_per_frame >= 1, "raw drive: oxts_packets_per_frame must be >= 1");
   Require(velodyne_beams >= 2 && velodyne_azimuth_step_deg > 0.0 && velodyne_max_range > 0.0 && velodyne_height > 0.0,
           "raw drive: Velodyne beams >= 2, azimuth step, range and height > 0");
   Require(std::abs(latitude) < 80.0 && std::abs(longitude) <= 180.0, "raw drive: latitude/longitude out of range");
@@ -306,7 +307,7 @@ KittiRawDriveSummary WriteKittiRawDrive(const std::string& sequence_dir, const s
   origin.yaw = options.heading;
   const Eigen::Isometry3d world_from_first_imu = OxtsToPose(origin, scale);
 
-  std::vector<double> left_times, right_times;
+  std::vector<double> left_times, right_times, oxts_times;
   int right_written = 0;
   std::unique_ptr<ProgressBar> bar;
   if (show_progress) bar = std::make_unique<ProgressBar>("raw drive", sequence->size());
@@ -347,11 +348,25 @@ KittiRawDriveSummary WriteKittiRawDrive(const std::string& sequence_dir, const s
     }
 
     // IMU pose in the Mercator world: first IMU pose * (IMU motion = camera motion seen from the IMU).
-    const Eigen::Isometry3d first_camera_from_camera = poses.poses[i].T_world_camera;
-    const Eigen::Isometry3d world_from_imu =
-        world_from_first_imu * rect_from_imu.inverse() * first_camera_from_camera * rect_from_imu;
-    WriteOxtsPacket(JoinPath(JoinPath(summary.drive_dir, "oxts/data"), RawName(i, ".txt")),
-                    PoseToOxts(world_from_imu, scale));
+    // Extract drives: several packets per frame, the first at the frame's time, the others on the way to
+    // the next frame (translation linear, rotation slerp); the last frame has its own packet only.
+    const int per_frame = options.extract && i + 1 < sequence->size() ? options.oxts_packets_per_frame : 1;
+    for (int k = 0; k < per_frame; ++k) {
+      const double s = static_cast<double>(k) / per_frame;
+      const Eigen::Isometry3d& a = poses.poses[i].T_world_camera;
+      const Eigen::Isometry3d& b = poses.poses[std::min(i + 1, sequence->size() - 1)].T_world_camera;
+      Eigen::Isometry3d first_camera_from_camera = Eigen::Isometry3d::Identity();
+      first_camera_from_camera.linear() =
+          Eigen::Quaterniond(a.linear()).slerp(s, Eigen::Quaterniond(b.linear())).toRotationMatrix();
+      first_camera_from_camera.translation() = (1.0 - s) * a.translation() + s * b.translation();
+      const Eigen::Isometry3d world_from_imu =
+          world_from_first_imu * rect_from_imu.inverse() * first_camera_from_camera * rect_from_imu;
+      WriteOxtsPacket(JoinPath(JoinPath(summary.drive_dir, "oxts/data"), RawName(static_cast<int>(oxts_times.size()), ".txt")),
+                      PoseToOxts(world_from_imu, scale));
+      const double next_time =
+          i + 1 < sequence->size() ? options.start_time + sequence->timestamps()[i + 1] - sequence->timestamps()[0] : time;
+      oxts_times.push_back(time + s * (next_time - time));
+    }
     if (bar) bar->Update(i + 1);
   }
   if (bar) bar->Finish();
@@ -364,7 +379,7 @@ KittiRawDriveSummary WriteKittiRawDrive(const std::string& sequence_dir, const s
                     id % 2 == 0 ? left_times : right_times);
   }
   WriteTimestamps(JoinPath(summary.drive_dir, "velodyne_points/timestamps.txt"), left_times);
-  WriteTimestamps(JoinPath(summary.drive_dir, "oxts/timestamps.txt"), left_times);
+  WriteTimestamps(JoinPath(summary.drive_dir, "oxts/timestamps.txt"), oxts_times);
   WriteText(JoinPath(date_dir, "calib_imu_to_velo.txt"), [&](std::ostream& out) { WriteRigid(out, rig.velo_from_imu); });
   WriteText(JoinPath(date_dir, "calib_velo_to_cam.txt"), [&](std::ostream& out) { WriteRigid(out, rig.cam0_from_velo); });
   WriteCamToCam(JoinPath(date_dir, "calib_cam_to_cam.txt"), left, right, rig, options.distortion, camera.baseline);

@@ -59,6 +59,8 @@ struct KittiRawDriveOptions {
   double raw_margin = 0.08;          // extract: raw images are larger than the rectified by this fraction per side
   std::vector<int> right_dropped;    // extract: frame indices the right cameras (01, 03) lose
   double right_trigger_offset = 4e-4;  // extract: s the right cameras' timestamps lag the left ones (< 10 ms)
+  int oxts_packets_per_frame = 10;   // extract: GPS/IMU packets per camera frame (KITTI records it at 100 Hz,
+                                     // cameras at 10 Hz; poses interpolated between frames); sync drives: 1
   double start_time = 1317042130.0;  // epoch seconds (UTC) of the first frame: 2011-09-26 13:02:10
   int velodyne_beams = 64;           // HDL-64E: elevations +2.0 .. -24.9 deg
   double velodyne_azimuth_step_deg = 0.2;  // azimuth resolution of the synthetic scan

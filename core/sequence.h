@@ -78,6 +78,12 @@ std::unique_ptr<SequenceReader> OpenKittiRawSequence(const std::string& path, Ca
 bool IsKittiRawDrive(const std::string& path);
 // "2011-09-26 13:02:25.964389445" (KITTI raw timestamps.txt) -> seconds since the epoch, UTC.
 double ParseKittiRawTimestamp(const std::string& text, const std::string& path);
+// Every line of a raw drive's timestamps.txt (image_0X/, velodyne_points/, oxts/) in seconds since the epoch;
+// line k belongs to file k. Throws naming the file.
+std::vector<double> ReadKittiRawTimestamps(const std::string& path);
+// Whether a raw drive folder is an unsynced `_extract` one (distorted images, streams numbered on their own,
+// OXTS at 100 Hz) rather than a `_sync` one (rectified, one file per frame in every stream).
+bool IsKittiRawExtractDrive(const std::string& path);
 // Seconds since the epoch (UTC) -> "2011-09-26 13:02:25.964389445", the inverse of the above.
 std::string FormatKittiRawTimestamp(double epoch_seconds);
 std::unique_ptr<SequenceReader> OpenEurocSequence(const std::string& path);

@@ -57,6 +57,22 @@ std::string FormatKittiRawTimestamp(double epoch_seconds) {
   return text;
 }
 
+std::vector<double> ReadKittiRawTimestamps(const std::string& path) {
+  std::ifstream in(path);
+  RequireFile(in.good(), path, "cannot open timestamps file");
+  std::vector<double> times;
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
+    times.push_back(ParseKittiRawTimestamp(line, path));
+  }
+  return times;
+}
+
+bool IsKittiRawExtractDrive(const std::string& path) {
+  return fs::path(path).lexically_normal().filename().string().find("_extract") != std::string::npos;
+}
+
 namespace {
 
 // Extract drives: a left and a right frame belong together when their timestamps differ by less than this
@@ -93,17 +109,6 @@ RawRectifier MakeRectifier(const KittiCalibration& c, int id, const std::string&
   return rectifier;
 }
 
-std::vector<double> ReadRawTimestamps(const std::string& path) {
-  std::ifstream in(path);
-  RequireFile(in.good(), path, "cannot open timestamps file");
-  std::vector<double> times;
-  std::string line;
-  while (std::getline(in, line)) {
-    if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
-    times.push_back(ParseKittiRawTimestamp(line, path));
-  }
-  return times;
-}
 
 // One camera of a drive: its image files, their timestamps and (extract drives) its rectifier.
 struct RawCameraFiles {
@@ -116,7 +121,7 @@ struct RawCameraFiles {
 class KittiRawSequence : public SequenceReader {
  public:
   KittiRawSequence(const std::string& root, CameraPair pair) : root_(root) {
-    extract_ = fs::path(root).lexically_normal().filename().string().find("_extract") != std::string::npos;
+    extract_ = IsKittiRawExtractDrive(root);
     const bool grey = fs::is_directory(Camera(0));
     const int left_id = pair == CameraPair::kColour || !grey ? 2 : 0, right_id = left_id + 1;
     RequireFile(fs::is_directory(Camera(left_id)), Camera(left_id),
@@ -252,7 +257,7 @@ class KittiRawSequence : public SequenceReader {
     camera.files = internal::ListImages(camera.dir);
     RequireFile(!camera.files.empty(), camera.dir, "no images found");
     const std::string path = JoinPath(fs::path(camera.dir).parent_path().string(), "timestamps.txt");
-    const std::vector<double> times = ReadRawTimestamps(path);
+    const std::vector<double> times = ReadKittiRawTimestamps(path);
     if (times.size() == camera.files.size()) {
       camera.times = times;
     } else {

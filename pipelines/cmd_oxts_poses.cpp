@@ -1,6 +1,8 @@
 // `dvso oxts-poses`: ground-truth camera poses of a KITTI raw drive from its
 // GPS/IMU packets (core/kitti_oxts.h has the devkit convention), written as a
 // KITTI poses file for `dvso eval-odometry`.
+#include <algorithm>
+#include <cmath>
 #include <iostream>
 #include <memory>
 #include <optional>
@@ -25,7 +27,7 @@ void Run(const OxtsPosesArgs& args) {
   const std::vector<Eigen::Isometry3d> packets = OxtsCameraPoses(args.drive_dir, args.camera);
   // One line per frame the odometry keeps: the drive opened as a sequence (the pair of the chosen camera)
   // skips left frames without a right partner (extract drives drop frames), so the trajectory and this
-  // file match line by line. Frame names are the file numbers, and packet k belongs to file k.
+  // file match line by line. Frame names are the file numbers.
   // A drive without images (only oxts/ downloaded) gets one line per packet.
   Trajectory trajectory;
   if (!IsKittiRawDrive(args.drive_dir)) {
@@ -38,20 +40,50 @@ void Run(const OxtsPosesArgs& args) {
   }
   const std::unique_ptr<SequenceReader> sequence =
       OpenKittiRawSequence(args.drive_dir, args.camera >= 2 ? CameraPair::kColour : CameraPair::kGrey);
+  // Sync drives: packet k is the one the devkit picked for frame k. Extract drives record the GPS/IMU at
+  // 100 Hz and number every stream on its own: the packet nearest in time to the frame's image, as the
+  // devkit's synchronisation does.
+  const bool by_time = IsKittiRawExtractDrive(args.drive_dir);
+  std::vector<double> packet_times, image_times;
+  if (by_time) {
+    const std::string oxts_times_path = JoinPath(args.drive_dir, "oxts/timestamps.txt");
+    packet_times = ReadKittiRawTimestamps(oxts_times_path);
+    RequireFile(packet_times.size() == packets.size(), oxts_times_path,
+                std::to_string(packet_times.size()) + " timestamps for " + std::to_string(packets.size()) +
+                    " OXTS packets");
+    image_times = ReadKittiRawTimestamps(JoinPath(args.drive_dir, "image_0" + std::to_string(args.camera) +
+                                                                      "/timestamps.txt"));
+  }
   Eigen::Isometry3d first_inverse = Eigen::Isometry3d::Identity();
+  int far_packets = 0;
+  double worst_gap = 0.0;
   for (int i = 0; i < sequence->size(); ++i) {
     const std::string name = sequence->FrameName(i);
     const std::optional<long long> number = ParseFrameNumber(name);
-    RequireFile(number && static_cast<size_t>(*number) < packets.size(), args.drive_dir,
+    size_t packet = number ? static_cast<size_t>(*number) : packets.size();
+    if (by_time) {
+      RequireFile(number && static_cast<size_t>(*number) < image_times.size(), args.drive_dir,
+                  "frame " + name + " has no line in its camera's timestamps.txt");
+      const double image_time = image_times[static_cast<size_t>(*number)];
+      packet = NearestTimestamp(packet_times, image_time);
+      const double gap = std::abs(packet_times[packet] - image_time);
+      worst_gap = std::max(worst_gap, gap);
+      if (gap > kMaxOxtsFrameGap) ++far_packets;
+    }
+    RequireFile(packet < packets.size(), args.drive_dir,
                 "frame " + name + " has no OXTS packet of its own (" + std::to_string(packets.size()) + " packets)");
-    const Eigen::Isometry3d pose = packets[static_cast<size_t>(*number)];
+    const Eigen::Isometry3d pose = packets[packet];
     if (i == 0) first_inverse = pose.inverse();
     trajectory.poses.push_back({sequence->timestamps()[i], first_inverse * pose});
   }
+  if (far_packets > 0) {
+    std::cerr << "dvso: warning: " << args.drive_dir << ": " << far_packets << " frame(s) whose nearest OXTS packet is more "
+              << "than " << kMaxOxtsFrameGap << " s away (worst " << worst_gap << " s): their poses are less exact\n";
+  }
   WriteKittiTrajectory(args.out_path, trajectory);
   std::cout << trajectory.poses.size() << " poses of rectified camera " << args.camera << " (" << packets.size()
-            << " OXTS packets, one per kept stereo frame; path " << trajectory.PathLength() << " m) written to "
-            << args.out_path << "\n";
+            << " OXTS packets, " << (by_time ? "the nearest in time to" : "one per") << " each kept stereo frame; path "
+            << trajectory.PathLength() << " m) written to " << args.out_path << "\n";
 }
 
 }  // namespace

@@ -115,6 +115,16 @@ TEST(KittiOxts, SyntheticDriveRoundTripsThroughCalibrationAndCli) {
   EXPECT_LT((written.poses[kFrames - 1].T_world_camera.translation() - poses[kFrames - 1].translation()).norm(), 1e-9);
 }
 
+TEST(KittiOxts, NearestTimestampNeedsNoSortedTimes) {
+  // Real OXTS timestamps jump back now and then: the nearest is searched over all of them.
+  const std::vector<double> times = {10.00, 10.01, 10.02, 9.50, 10.03, 10.04};
+  EXPECT_EQ(NearestTimestamp(times, 10.012), 1u);
+  EXPECT_EQ(NearestTimestamp(times, 9.6), 3u);
+  EXPECT_EQ(NearestTimestamp({1.0, 2.0, 3.0}, 2.5), 1u);  // a tie: the first
+  EXPECT_EQ(NearestTimestamp(times, 50.0), 5u);
+  EXPECT_THROW(NearestTimestamp({}, 1.0), Error);
+}
+
 TEST(KittiOxts, BadInputIsOneClearError) {
   TempDir tmp("oxts_bad");
   const fs::path drive = tmp.path / "drive_sync";
