@@ -96,7 +96,10 @@ void AddOdometryCommand(CLI::App& app) {
   cmd->add_option("--preset", args->preset, "default (2000 points) | fast (800 points)")
       ->check(CLI::IsMember({"default", "fast"}));
   cmd->add_option("--out", args->out, "Output directory")->required();
-  cmd->add_option("--first", args->first, "First frame index");
+  cmd->add_option("--first", args->first,
+                  "First frame index (trajectory.txt then starts at this frame, with no frame numbers: compare it with "
+                  "the GT from line --first on, e.g. `tail -n +$((first+1)) poses.txt`; trajectory_tum.txt carries the "
+                  "sequence's times and evaluates as it is)");
   cmd->add_option("--count", args->count, "Number of frames (-1 = all)");
   cmd->add_option("--camera", args->camera_file, "DSO camera file (image-folder sequences only)");
   cmd->add_option("--cameras", args->cameras, "KITTI layouts (raw drive, odometry folder): grey (00/01) or colour (02/03, read as grey) pair")
