@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <limits>
 
 #include "core/error.h"
 #include "vo/system/odometry_options.h"
@@ -34,8 +35,16 @@ TEST(SystemOptions, YamlRoundTripAndPartialOverride) {
   OdometryOptions o = OdometryOptions::Preset("fast");
   o.tracker.huber_threshold = 7.5;
   o.window.max_keyframes = 5;
+  o.selector.seed = 7;
+  o.immature.gn_threshold = 0.05;
+  o.tracker.max_affine_a = std::numeric_limits<double>::infinity();  // allowed: no bound
   const OdometryOptions back = OdometryOptionsFromYamlString(OdometryOptionsToYaml(o));
   EXPECT_EQ(OdometryOptionsToYaml(back), OdometryOptionsToYaml(o));
+  // Field by field too, so that a field the YAML leaves out cannot pass as equal text.
+  EXPECT_EQ(back.selector.seed, 7u);
+  EXPECT_EQ(back.immature.gn_threshold, 0.05);
+  EXPECT_EQ(back.tracker.max_affine_a, std::numeric_limits<double>::infinity());
+  EXPECT_EQ(back.tracker.huber_threshold, 7.5);
   const OdometryOptions partial = OdometryOptionsFromYamlString("keyframe:\n  max_frames_between: 9\n");
   EXPECT_EQ(partial.keyframe.max_frames_between, 9);
   EXPECT_EQ(partial.active_points, 2000);  // untouched default

@@ -185,9 +185,13 @@ TEST(SystemSimulated, DamagedFrameIsCountedAsLostAndTheRunGoesOnUnlessStrict) {
   ASSERT_FALSE(dir.empty());
   const std::string seq = dir + "/seq";
   std::ofstream(seq + "/image_0/000007.png") << "not a png any more";
+  // An earlier interrupted run in the same folder: its marker goes once this run's files replace its own.
+  std::filesystem::create_directories(dir + "/out");
+  std::ofstream(dir + "/out/INTERRUPTED") << "interrupted after 3 of 14 frames\n";
   const auto run = dvso::testing::RunDvso("odometry --mode stereo --preset fast --no-progress --sequence " + seq +
                                           " --out " + dir + "/out");
   ASSERT_EQ(run.exit_code, 0) << run.out;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/out/INTERRUPTED"));
   EXPECT_NE(run.out.find("warning: frame 7 skipped"), std::string::npos) << run.out;
   EXPECT_NE(run.out.find("(unreadable 1)"), std::string::npos) << run.out;
   EXPECT_EQ(ReadTrajectory(dir + "/out/trajectory.txt", TrajectoryFormat::kKitti).size(), 14u);
@@ -205,6 +209,14 @@ TEST(SystemSimulated, DamagedFrameIsCountedAsLostAndTheRunGoesOnUnlessStrict) {
   EXPECT_EQ(strict.exit_code, 1);
   EXPECT_NE(strict.out.find("000007.png"), std::string::npos) << strict.out;
   EXPECT_FALSE(std::filesystem::exists(dir + "/strict/trajectory.txt"));
+  // A run that fails keeps an earlier interrupted run's files marked as partial.
+  std::filesystem::create_directories(dir + "/strict_again");
+  std::ofstream(dir + "/strict_again/INTERRUPTED") << "interrupted after 3 of 14 frames\n";
+  std::ofstream(dir + "/strict_again/trajectory.txt") << "1 0 0 0 0 1 0 0 0 0 1 0\n";
+  const auto failed = dvso::testing::RunDvso("odometry --mode stereo --preset fast --no-progress --strict --sequence " +
+                                             seq + " --out " + dir + "/strict_again");
+  EXPECT_EQ(failed.exit_code, 1);
+  EXPECT_TRUE(std::filesystem::exists(dir + "/strict_again/INTERRUPTED"));
 }
 
 TEST(SystemSimulated, InterruptWritesTheFramesProcessedAndAMarker) {

@@ -1,5 +1,6 @@
 // YAML (de)serialisation of OdometryOptions. One visitor lists every field once,
 // so load, save and print can never disagree about the keys.
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -41,6 +42,7 @@ void VisitFields(Options& o, Visitor&& v) {
   v("selector", "grad_downweight_per_level", o.selector.grad_downweight_per_level);
   v("selector", "border", o.selector.border);
   v("selector", "max_adapt_iterations", o.selector.max_adapt_iterations);
+  v("selector", "seed", o.selector.seed);
 
   v("tracker", "huber_threshold", o.tracker.huber_threshold);
   v("tracker", "cutoff_threshold", o.tracker.cutoff_threshold);
@@ -64,6 +66,7 @@ void VisitFields(Options& o, Visitor&& v) {
   v("immature", "slack_interval", o.immature.slack_interval);
   v("immature", "min_improvement_factor", o.immature.min_improvement_factor);
   v("immature", "gn_iterations", o.immature.gn_iterations);
+  v("immature", "gn_threshold", o.immature.gn_threshold);
   v("immature", "min_test_radius", o.immature.min_test_radius);
   v("immature", "min_quality", o.immature.min_quality);
   v("immature", "max_pixel_interval", o.immature.max_pixel_interval);
@@ -152,6 +155,11 @@ std::string OdometryOptionsToYaml(const OdometryOptions& options) {
     YAML::Node node = section[0] == '\0' ? root[key] : root[section][key];
     using T = std::decay_t<decltype(field)>;
     if constexpr (std::is_same_v<T, double>) {
+      // YAML's spelling of the non-finite values (yaml-cpp reads ".inf", not printf's "inf").
+      if (!std::isfinite(field)) {
+        node = std::isnan(field) ? std::string(".nan") : std::string(field > 0 ? ".inf" : "-.inf");
+        return;
+      }
       // Shortest text that reads back exactly ("0.2", not "0.20000000000000001").
       char text[64];
       for (int digits = 6; digits <= 17; ++digits) {

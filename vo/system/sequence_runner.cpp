@@ -99,7 +99,6 @@ SequenceRunSummary RunOdometryOnSequence(const SequenceReader& sequence, const O
   double total_ms = 0;
   const auto loop_start = std::chrono::steady_clock::now();
   const InterruptScope interrupt(run.stop_on_interrupt);
-  std::filesystem::remove(JoinPath(out_dir, "INTERRUPTED"));
   for (int i = run.first; i < end; ++i) {
     if (interrupt.requested()) {
       summary.interrupted = true;
@@ -133,11 +132,17 @@ SequenceRunSummary RunOdometryOnSequence(const SequenceReader& sequence, const O
   WriteTumTrajectory(JoinPath(out_dir, "trajectory_tum.txt"), trajectory);
   // Written last: a run that failed leaves neither log nor config behind.
   SaveOdometryOptions(JoinPath(out_dir, "config.yaml"), system.options());
+  // The marker of an earlier interrupted run goes only now that this run's files replace its partial ones: a
+  // run that fails before this point leaves those files marked.
   if (summary.interrupted) {
     WriteAtomically(JoinPath(out_dir, "INTERRUPTED"), [&](const std::string& temp) {
-      std::ofstream(temp) << "interrupted after " << summary.frames << " of " << end - run.first
-                          << " frames; trajectory.txt, trajectory_tum.txt and run_log.csv hold those frames\n";
+      std::ofstream marker(temp);
+      marker << "interrupted after " << summary.frames << " of " << end - run.first
+             << " frames; trajectory.txt, trajectory_tum.txt and run_log.csv hold those frames\n";
+      RequireFile(marker.good(), temp, "cannot write the interruption marker");
     });
+  } else {
+    std::filesystem::remove(JoinPath(out_dir, "INTERRUPTED"));
   }
   summary.keyframes = system.num_keyframes_total();
   summary.lost = recorder.CountStatus(FrameStatus::kLost) + recorder.CountStatus(FrameStatus::kUnreadable);
