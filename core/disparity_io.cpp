@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <cctype>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -58,6 +59,7 @@ size_t ParseNpyHeader(const std::string& path, const char* data, size_t size, in
   RequireFile(size >= 10 && std::memcmp(data, "\x93NUMPY", 6) == 0, path, "not a .npy file");
   const int major = static_cast<unsigned char>(data[6]);
   size_t header_len = 0, offset = 0;
+  RequireFile(major >= 1 && major <= 3, path, "unknown .npy format version " + std::to_string(major));
   if (major == 1) {
     header_len = static_cast<unsigned char>(data[8]) | (static_cast<unsigned char>(data[9]) << 8);
     offset = 10;
@@ -82,11 +84,19 @@ size_t ParseNpyHeader(const std::string& path, const char* data, size_t size, in
   while (pos < shape.size()) {
     while (pos < shape.size() && (shape[pos] == ' ' || shape[pos] == ',')) ++pos;
     if (pos >= shape.size()) break;
-    size_t used = 0;
-    dims.push_back(std::stol(shape.substr(pos), &used));
-    pos += used;
+    // Digits, then an optional 'L' (Python 2 wrote long dimensions as "3L").
+    size_t end = pos;
+    while (end < shape.size() && std::isdigit(static_cast<unsigned char>(shape[end]))) ++end;
+    RequireFile(end > pos, path, "unreadable shape '(" + shape + ")' in the .npy header");
+    dims.push_back(std::stol(shape.substr(pos, end - pos)));
+    pos = end;
+    if (pos < shape.size() && shape[pos] == 'L') ++pos;
   }
   RequireFile(dims.size() == 3, path, "expected a (N, H, W) array, got " + std::to_string(dims.size()) + " dims");
+  constexpr long kMaxDimension = 1 << 20;
+  for (long d : dims) {
+    RequireFile(d > 0 && d < kMaxDimension, path, "shape '(" + shape + ")' has an empty or implausible dimension");
+  }
   *n = static_cast<int>(dims[0]);
   *h = static_cast<int>(dims[1]);
   *w = static_cast<int>(dims[2]);

@@ -12,6 +12,7 @@
 //  - Monocular folder: images (sorted by name) + a DSO-style camera file.
 #pragma once
 
+#include <algorithm>
 #include <memory>
 #include <opencv2/core.hpp>
 #include <optional>
@@ -56,6 +57,12 @@ class SequenceReader {
   // maps) are named after it.
   virtual std::string FrameName(int index) const = 0;
 };
+
+// One past the last frame of a run over frames [first, first + count) of a sequence of `size` frames;
+// count < 0 = to the end. Never past the end, and no int overflow for a huge count. Requires first < size.
+inline int RunEndFrame(int size, int first, int count) {
+  return count < 0 ? size : first + std::min(size - first, count);
+}
 
 // Which stereo pair of a KITTI layout (raw drive or odometry folder) is the sequence's left/right pair:
 // the grey cameras 00/01 (odometry and labels) or the colour cameras 02/03 (read as grey for the odometry,

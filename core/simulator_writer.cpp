@@ -10,9 +10,11 @@
 // The metadata files are written last, so an interrupted run is recognisably
 // incomplete; every file is written atomically.
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <future>
 #include <iomanip>
@@ -91,6 +93,24 @@ void WriteSimulationYaml(const std::string& path, const StreetSimulator& simulat
 
 }  // namespace
 
+namespace {
+
+// Removes the simulator's frame files (%06d.png) numbered `first_stale` and up from `dir`, if it exists;
+// other files are left alone.
+void RemoveStaleSimulatedFrames(const std::string& dir, int first_stale) {
+  if (!std::filesystem::is_directory(dir)) return;
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+    const std::string stem = entry.path().stem().string();
+    if (entry.path().extension() != ".png" || stem.size() != 6 ||
+        !std::all_of(stem.begin(), stem.end(), [](unsigned char c) { return std::isdigit(c) != 0; })) {
+      continue;
+    }
+    if (std::stoi(stem) >= first_stale) std::filesystem::remove(entry.path());
+  }
+}
+
+}  // namespace
+
 SimulationSummary WriteSimulatedSequence(const SimulatorOptions& options, const std::string& output_dir,
                                          bool show_progress) {
   const auto start = std::chrono::steady_clock::now();
@@ -139,6 +159,12 @@ SimulationSummary WriteSimulatedSequence(const SimulatorOptions& options, const 
     }
   }
   if (bar) bar->Finish();
+  // A longer (or colour) earlier simulation into the same folder leaves frames this one did not write:
+  // without this, the folder would hold more images than poses and times.
+  for (const char* d : {"image_0", "image_1", "depth_0", "disp_0", "disp_1", "image_2", "image_3"}) {
+    const bool written = std::find(dirs.begin(), dirs.end(), d) != dirs.end();
+    RemoveStaleSimulatedFrames(JoinPath(output_dir, d), written ? n : 0);
+  }
 
   // Metadata last.
   WriteKittiCalibration(JoinPath(output_dir, "calib.txt"), simulator.camera());

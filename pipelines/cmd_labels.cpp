@@ -1,6 +1,7 @@
 // `dvso labels`: sparse disparity labels from Stereo DSO (issue 4).
 #include <filesystem>
 #include <iostream>
+#include <map>
 #include <memory>
 
 #include "core/error.h"
@@ -43,13 +44,29 @@ void RunLabels(const LabelsArgs& args) {
   }
   const std::vector<std::string> sequences =
       args.list.empty() ? std::vector<std::string>{args.sequence} : labels::ReadSequenceList(args.list);
+  // With --list, each sequence writes into OUT/<its folder name> ("a/seq/" is "seq" too).
+  auto folder_name = [](const std::string& sequence) {
+    std::filesystem::path p = std::filesystem::path(sequence).lexically_normal();
+    if (p.filename().empty()) p = p.parent_path();
+    return p.filename().string();
+  };
+  if (!args.list.empty()) {
+    // Two sequences with the same folder name would share (and skip) one output folder.
+    std::map<std::string, std::string> owner;
+    for (const std::string& sequence : sequences) {
+      const std::string name = folder_name(sequence);
+      const auto [it, fresh] = owner.emplace(name, sequence);
+      RequireFile(fresh, args.list, "'" + it->second + "' and '" + sequence + "' would both write " +
+                                        JoinPath(args.out, name) + " (sequence folders need distinct names)");
+    }
+  }
   nlohmann::json all = nlohmann::json::array();
   labels::LabelStatistics total;
   for (size_t s = 0; s < sequences.size(); ++s) {
     const std::string& sequence = sequences[s];
     const std::string out = args.list.empty()
                                 ? args.out
-                                : JoinPath(args.out, std::filesystem::path(sequence).lexically_normal().filename().string());
+                                : JoinPath(args.out, folder_name(sequence));
     labels::LabelRunOptions run = options;
     run.gt_disparity_dir = !args.gt_disparity.empty() ? args.gt_disparity
                            : !args.gt_subdir.empty()  ? JoinPath(sequence, args.gt_subdir)

@@ -159,7 +159,7 @@ LabelRunSummary RunLabelExtraction(const std::string& sequence_dir, const std::s
     if (!dir.empty()) RequireFile(fs::is_directory(dir), dir, "ground-truth disparity folder does not exist");
   }
   Require(options.first < sequence->size(), sequence_dir + ": first frame beyond the sequence");
-  const int end = options.count < 0 ? sequence->size() : std::min(sequence->size(), options.first + options.count);
+  const int end = RunEndFrame(sequence->size(), options.first, options.count);
   EnsureDirectory(out_dir);
 
   LabelRunSummary summary;

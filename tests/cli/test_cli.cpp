@@ -89,3 +89,39 @@ TEST(Cli, EvalLabelsCountsWrongLabelsByPlaceAndNamesAMissingGroundTruth) {
   EXPECT_EQ(missing.exit_code, 1);
   EXPECT_NE(missing.out.find("000001.png"), std::string::npos) << missing.out;
 }
+
+TEST(Cli, ShorterSimulationIntoTheSameFolderLeavesNoStaleFrames) {
+  const std::string dir = TempDir("resimulate");
+  const std::string common = "simulate --quiet --width 96 --height 32 --out " + dir + "/seq";
+  ASSERT_EQ(RunDvso(common + " --count 6 --color").exit_code, 0);
+  const CliRun again = RunDvso(common + " --count 3");
+  ASSERT_EQ(again.exit_code, 0) << again.out;
+  auto count = [](const std::string& folder) {
+    if (!fs::is_directory(folder)) return 0;
+    int n = 0;
+    for (const auto& entry : fs::directory_iterator(folder)) n += entry.path().extension() == ".png";
+    return n;
+  };
+  EXPECT_EQ(count(dir + "/seq/image_0"), 3);
+  EXPECT_EQ(count(dir + "/seq/disp_1"), 3);
+  EXPECT_EQ(count(dir + "/seq/image_2"), 0);  // the earlier colour frames are not this grey sequence's
+  // ... so the folder reads as one consistent sequence again.
+  const CliRun odometry = RunDvso("odometry --no-progress --mode stereo --preset fast --sequence " + dir + "/seq --out " +
+                                  dir + "/out --first 1 --count 2147483647");
+  ASSERT_EQ(odometry.exit_code, 0) << odometry.out;
+  // A huge --count means "to the end" (2 frames from frame 1), not an overflowed empty range.
+  std::ifstream trajectory(dir + "/out/trajectory.txt");
+  int lines = 0;
+  for (std::string line; std::getline(trajectory, line);) lines += !line.empty();
+  EXPECT_EQ(lines, 2);
+}
+
+TEST(Cli, LabelListWithTwoSequencesOfOneNameIsAnError) {
+  const std::string dir = TempDir("label_list");
+  fs::create_directories(dir + "/a/seq");
+  fs::create_directories(dir + "/b/seq");
+  std::ofstream(dir + "/list.txt") << dir << "/a/seq\n" << dir << "/b/seq/\n";
+  const CliRun r = RunDvso("labels --list " + dir + "/list.txt --out " + dir + "/labels");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.out.find("distinct names"), std::string::npos) << r.out;
+}

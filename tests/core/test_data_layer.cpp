@@ -4,6 +4,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <tuple>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -206,6 +207,45 @@ TEST(DisparityIo, NpyStackIsScaledByWidthAndResized) {
   EXPECT_EQ(with_nan.Frame(1, 8, 4).at<float>(2, 2), 0.0f);  // a NaN prediction is "no depth", not an error
   WriteText(dir + "/not.npy", "hello");
   EXPECT_THROW(NpyDisparityStack(dir + "/not.npy"), Error);
+}
+
+// A version-1 .npy file with the given header dict and `floats` zero values.
+void WriteRawNpy(const std::string& path, const std::string& dict, size_t floats, int major = 1) {
+  std::string header = dict;
+  while ((10 + header.size() + 1) % 64 != 0) header += ' ';
+  header += '\n';
+  std::ofstream out(path, std::ios::binary);
+  out.write("\x93NUMPY", 6);
+  out.put(static_cast<char>(major));
+  out.put(0);
+  out.put(static_cast<char>(header.size() & 0xff));
+  out.put(static_cast<char>(header.size() >> 8));
+  out << header;
+  const std::vector<float> zeros(floats, 0.f);
+  out.write(reinterpret_cast<const char*>(zeros.data()), static_cast<std::streamsize>(zeros.size() * sizeof(float)));
+}
+
+TEST(DisparityIo, NpyHeadersFromOtherWritersReadOrFailInOneLine) {
+  const std::string dir = TempDir("npy_headers");
+  // Python 2 wrote long dimensions with an L.
+  WriteRawNpy(dir + "/py2.npy", "{'descr': '<f4', 'fortran_order': False, 'shape': (3L, 4L, 8L), }", 3 * 4 * 8);
+  const NpyDisparityStack py2(dir + "/py2.npy");
+  EXPECT_EQ(py2.size(), 3);
+  EXPECT_EQ(py2.width(), 8);
+  for (const auto& [name, dict, major] :
+       {std::tuple{"empty", "{'descr': '<f4', 'fortran_order': False, 'shape': (3, 0, 8), }", 1},
+        std::tuple{"words", "{'descr': '<f4', 'fortran_order': False, 'shape': (3, four, 8), }", 1},
+        std::tuple{"version", "{'descr': '<f4', 'fortran_order': False, 'shape': (3, 4, 8), }", 4},
+        std::tuple{"float64", "{'descr': '<f8', 'fortran_order': False, 'shape': (3, 4, 8), }", 1}}) {
+    const std::string path = dir + "/" + name + ".npy";
+    WriteRawNpy(path, dict, 3 * 4 * 8 * 2, major);
+    try {
+      NpyDisparityStack stack(path);
+      ADD_FAILURE() << name << " was accepted";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+    }
+  }
 }
 
 TEST(DisparitySource, FolderSourceResizesAndScales) {

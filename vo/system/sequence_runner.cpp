@@ -77,7 +77,7 @@ SequenceRunSummary RunOdometryOnSequence(const SequenceReader& sequence, const O
   }
   Require(run.first < sequence.size(), "--first " + std::to_string(run.first) + " is beyond the sequence (" +
                                            std::to_string(sequence.size()) + " frames)");
-  const int end = run.count < 0 ? sequence.size() : std::min(sequence.size(), run.first + run.count);
+  const int end = RunEndFrame(sequence.size(), run.first, run.count);
   EnsureDirectory(out_dir);
 
   System system(options, sequence.camera(), mode, run.predictions);
