@@ -63,9 +63,8 @@ void RunDemo(const DemoArgs& args) {
   sim.trajectory_path = poses;
   sim.first_frame = args.first;
   sim.num_frames = args.frames;
-  if (args.width > 0 && args.height > 0) {
-    sim.camera = sim.camera.Resized(args.width, args.height);
-  }
+  Require((args.width > 0) == (args.height > 0), "give both --width and --height (or neither: KITTI 1241x376)");
+  if (args.width > 0) sim.camera = sim.camera.Resized(args.width, args.height);
   std::cout << "== 1/4 simulate: " << args.frames << " frames along KITTI " << args.kitti_sequence << " ("
             << sim.camera.left.width << "x" << sim.camera.left.height << ") -> " << sequence_dir << std::endl;
   const SimulationSummary simulated = WriteSimulatedSequence(sim, sequence_dir, !args.quiet);
@@ -153,7 +152,11 @@ void AddDemoCommand(CLI::App& app) {
   cmd->add_option("--width", args->width, "Image width (default KITTI 1241)");
   cmd->add_option("--height", args->height, "Image height (default KITTI 376)");
   cmd->add_option("--data-dir", args->data_dir, "The repository's data/ folder")->capture_default_str();
-  cmd->add_option("--model", args->model, "TorchScript model for the depth-network step")->capture_default_str();
+  cmd->add_option("--model", args->model,
+                  "TorchScript model for the depth-network step (a named file must exist; without the shipped one the "
+                  "step is skipped)")
+      ->capture_default_str()
+      ->check(CLI::ExistingFile);
   cmd->add_flag("--quiet", args->quiet, "No progress bars");
   cmd->callback([args] { RunDemo(*args); });
 }

@@ -159,7 +159,13 @@ std::vector<double> ParseRange(const std::string& text) {
   Require(parts.size() == 3 && parts[1] > 0 && parts[0] > 0 && parts[2] >= parts[0],
           "--values '" + text + "': expected start:step:end with 0 < start <= end and step > 0");
   std::vector<double> values;
-  const int n = static_cast<int>(std::floor((parts[2] - parts[0]) / parts[1] + 1e-9)) + 1;
+  // Each value is a whole odometry run: a grid of more than this is a typo (e.g. a step of 1e-9), not a plan.
+  constexpr double kMaxGridValues = 200;
+  const double count = std::floor((parts[2] - parts[0]) / parts[1] + 1e-9) + 1;
+  Require(count <= kMaxGridValues, "--values '" + text + "': " + std::to_string(static_cast<long long>(count)) +
+                                       " values, more than the " + std::to_string(static_cast<int>(kMaxGridValues)) +
+                                       " odometry runs a grid search may take");
+  const int n = static_cast<int>(count);
   for (int i = 0; i < n; ++i) values.push_back(parts[0] + i * parts[1]);
   return values;
 }
