@@ -350,11 +350,13 @@ KittiRawDriveSummary WriteKittiRawDrive(const std::string& sequence_dir, const s
     // IMU pose in the Mercator world: first IMU pose * (IMU motion = camera motion seen from the IMU).
     // Extract drives: several packets per frame, the first at the frame's time, the others on the way to
     // the next frame (translation linear, rotation slerp); the last frame has its own packet only.
-    const int per_frame = options.extract && i + 1 < sequence->size() ? options.oxts_packets_per_frame : 1;
+    const bool last = i + 1 == sequence->size();
+    const int per_frame = options.extract && !last ? options.oxts_packets_per_frame : 1;
+    const Eigen::Isometry3d& a = poses.poses[i].T_world_camera;
+    const Eigen::Isometry3d& b = poses.poses[last ? i : i + 1].T_world_camera;
+    const double next_time = last ? time : options.start_time + sequence->timestamps()[i + 1] - sequence->timestamps()[0];
     for (int k = 0; k < per_frame; ++k) {
       const double s = static_cast<double>(k) / per_frame;
-      const Eigen::Isometry3d& a = poses.poses[i].T_world_camera;
-      const Eigen::Isometry3d& b = poses.poses[std::min(i + 1, sequence->size() - 1)].T_world_camera;
       Eigen::Isometry3d first_camera_from_camera = Eigen::Isometry3d::Identity();
       first_camera_from_camera.linear() =
           Eigen::Quaterniond(a.linear()).slerp(s, Eigen::Quaterniond(b.linear())).toRotationMatrix();
@@ -363,8 +365,6 @@ KittiRawDriveSummary WriteKittiRawDrive(const std::string& sequence_dir, const s
           world_from_first_imu * rect_from_imu.inverse() * first_camera_from_camera * rect_from_imu;
       WriteOxtsPacket(JoinPath(JoinPath(summary.drive_dir, "oxts/data"), RawName(static_cast<int>(oxts_times.size()), ".txt")),
                       PoseToOxts(world_from_imu, scale));
-      const double next_time =
-          i + 1 < sequence->size() ? options.start_time + sequence->timestamps()[i + 1] - sequence->timestamps()[0] : time;
       oxts_times.push_back(time + s * (next_time - time));
     }
     if (bar) bar->Update(i + 1);

@@ -119,19 +119,19 @@ class KittiSequence : public SequenceReader {
     const bool has_colour = fs::is_directory(JoinPath(root, "image_2"));
     // The grey pair unless the colour one is asked for or is all there is (colour-only download):
     // then image_2/image_3 are read as grey for the odometry, with their own calibration P2/P3.
-    colour_is_left_ = pair == CameraPair::kColour || !has_grey;
-    RequireFile(!colour_is_left_ || has_colour, JoinPath(root, "image_2"),
+    const bool colour_is_left = pair == CameraPair::kColour || !has_grey;
+    RequireFile(!colour_is_left || has_colour, JoinPath(root, "image_2"),
                 has_grey ? "no colour camera (--cameras colour needs image_2/)" : "no image_0/ or image_2/ folder");
-    left_dir_ = JoinPath(root, colour_is_left_ ? "image_2" : "image_0");
-    right_dir_ = JoinPath(root, colour_is_left_ ? "image_3" : "image_1");
+    left_dir_ = JoinPath(root, colour_is_left ? "image_2" : "image_0");
+    right_dir_ = JoinPath(root, colour_is_left ? "image_3" : "image_1");
     files_ = internal::ListImages(left_dir_);
     RequireFile(!files_.empty(), left_dir_, "no images found");
     const cv::Mat first = internal::LoadGreyImage(files_[0]);
     camera_ = ReadKittiCalibration(calib, first.cols, first.rows,
-                                   colour_is_left_ ? CameraPair::kColour : CameraPair::kGrey);
+                                   colour_is_left ? CameraPair::kColour : CameraPair::kGrey);
     stereo_ = camera_.baseline > 0 && fs::is_directory(right_dir_);
     // Colour beside the grey pair only when it was taken from the same centres (CameraPair).
-    color_ = colour_is_left_ || (has_colour && KittiColourMatchesGrey(calib));
+    color_ = colour_is_left || (has_colour && KittiColourMatchesGrey(calib));
     const std::string times = JoinPath(root, "times.txt");
     if (fs::is_regular_file(times)) {
       timestamps_ = ReadTimes(times);
@@ -173,7 +173,7 @@ class KittiSequence : public SequenceReader {
   std::string root_, left_dir_, right_dir_;
   std::vector<std::string> files_;
   StereoCamera camera_;
-  bool stereo_ = false, color_ = false, colour_is_left_ = false;
+  bool stereo_ = false, color_ = false;
   std::vector<double> timestamps_;
 };
 

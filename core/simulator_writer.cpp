@@ -116,12 +116,12 @@ SimulationSummary WriteSimulatedSequence(const SimulatorOptions& options, const 
   const auto start = std::chrono::steady_clock::now();
   StreetSimulator simulator(options);
   const int n = simulator.num_frames();
-  std::vector<std::string> dirs = {"image_0", "image_1", "depth_0", "disp_0", "disp_1"};
+  const std::vector<std::string> grey_dirs = {"image_0", "image_1", "depth_0", "disp_0", "disp_1"};
+  const std::vector<std::string> colour_dirs = {"image_2", "image_3"};
+  for (const auto& d : grey_dirs) EnsureDirectory(JoinPath(output_dir, d));
   if (options.color) {
-    dirs.push_back("image_2");
-    dirs.push_back("image_3");
+    for (const auto& d : colour_dirs) EnsureDirectory(JoinPath(output_dir, d));
   }
-  for (const auto& d : dirs) EnsureDirectory(JoinPath(output_dir, d));
 
   SimulationSummary summary;
   Trajectory poses;
@@ -161,10 +161,8 @@ SimulationSummary WriteSimulatedSequence(const SimulatorOptions& options, const 
   if (bar) bar->Finish();
   // A longer (or colour) earlier simulation into the same folder leaves frames this one did not write:
   // without this, the folder would hold more images than poses and times.
-  for (const char* d : {"image_0", "image_1", "depth_0", "disp_0", "disp_1", "image_2", "image_3"}) {
-    const bool written = std::find(dirs.begin(), dirs.end(), d) != dirs.end();
-    RemoveStaleSimulatedFrames(JoinPath(output_dir, d), written ? n : 0);
-  }
+  for (const auto& d : grey_dirs) RemoveStaleSimulatedFrames(JoinPath(output_dir, d), n);
+  for (const auto& d : colour_dirs) RemoveStaleSimulatedFrames(JoinPath(output_dir, d), options.color ? n : 0);
 
   // Metadata last.
   WriteKittiCalibration(JoinPath(output_dir, "calib.txt"), simulator.camera());
