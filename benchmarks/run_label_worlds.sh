@@ -7,7 +7,9 @@
 # labels/frame, share within 1 px, within 3 %, MAE, and where the > 1 px labels sit.
 #
 #   benchmarks/run_label_worlds.sh            (env: DVSO, OUT, COUNT=150 frames per world,
-#                                              WORLDS="style:posefile:first:seed ...", LABEL_ARGS)
+#                                              WORLDS="style:posefile:first:seed[:simulate args] ...", LABEL_ARGS)
+# Optional simulate arguments are comma-separated, e.g. varied:08:1500:9633:--no-edge-aa or
+# varied:00:1000:9631:--noise-sigma,3.5 (looks beyond the appearance styles: aliased silhouettes, sensor noise).
 # Also writes $OUT/label_worlds.json and $OUT/label_worlds.md (the table, markdown).
 set -euo pipefail
 REPO=$(cd "$(dirname "$0")/.." && pwd)
@@ -22,13 +24,14 @@ read -r -a LABEL_EXTRA <<< "${LABEL_ARGS:-}"
 mkdir -p "$OUT"
 
 for world in $WORLDS; do
-  IFS=: read -r style poses first seed <<< "$world"
+  IFS=: read -r style poses first seed sim_args <<< "$world"
+  IFS=, read -r -a SIM_EXTRA <<< "${sim_args:-}"
   name="${style}_${poses}_${seed}"
   seq="$OUT/$name"
   if [[ ! -f "$seq/simulation.yaml" ]]; then
     echo "[$(date -u +%H:%M:%S)] simulate $name ($COUNT frames)"
     "$DVSO" simulate --out "$seq" --trajectory "$REPO/data/kitti_poses/$poses.txt" --first "$first" --count "$COUNT" \
-      --seed "$seed" --appearance "$style" --quiet > "$OUT/$name.simulate.log"
+      --seed "$seed" --appearance "$style" --quiet "${SIM_EXTRA[@]}" > "$OUT/$name.simulate.log"
   fi
   echo "[$(date -u +%H:%M:%S)] labels $name"
   /usr/bin/env time -f "%e" -o "$OUT/$name.labels.seconds" \
@@ -44,14 +47,15 @@ out, worlds = sys.argv[1], sys.argv[2:]
 kinds = ["thin", "depth_edge", "far", "low_texture", "other"]
 rows, result = [], {}
 for w in worlds:
-    style, poses, first, seed = w.split(":")
+    style, poses, first, seed = w.split(":")[:4]
+    look = " ".join([style] + (w.split(":")[4].split(",") if w.count(":") > 3 else []))
     name = f"{style}_{poses}_{seed}"
     j = json.load(open(f"{out}/{name}.eval.json"))
     secs = float(open(f"{out}/{name}.labels.seconds").read().split()[-1])
     result[name] = dict(j, labels_seconds=secs)
     wrong = " / ".join("%.0f" % (100 * j["by_kind"][k]["share_of_wrong"]) for k in kinds)
     within = " / ".join("%.1f" % (100 * j["by_kind"][k]["share_within_threshold"]) for k in kinds)
-    rows.append(f"| {style} | KITTI {poses} from {first} | {seed} | {j['frames']} | {j['labels_per_frame_mean']:.0f} "
+    rows.append(f"| {look} | KITTI {poses} from {first} | {seed} | {j['frames']} | {j['labels_per_frame_mean']:.0f} "
                 f"({j['labels_per_frame_min']}) | {100 * j['share_within_1px']:.2f} | {100 * j['share_within_3_percent']:.2f} "
                 f"| {j['mean_abs_error_px']:.3f} | {wrong} | {within} |")
 head = ("| look | path | seed | frames | labels/frame mean (min) | within 1 px % | within 3 % % | MAE px "

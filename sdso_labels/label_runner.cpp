@@ -39,6 +39,7 @@ LabelRunOptions LoadLabelRunOptions(const std::string& path) {
   labels.Read("max_disparity_stddev", &options.labels.max_disparity_stddev);
   labels.Read("max_mean_energy", &options.labels.max_mean_energy);
   labels.Read("max_stereo_energy", &options.labels.max_stereo_energy);
+  labels.Read("max_stereo_energy_ratio", &options.labels.max_stereo_energy_ratio);
   labels.Read("future_keyframes", &options.labels.future_keyframes);
   labels.Read("past_keyframes", &options.labels.past_keyframes);
   labels.Read("right_labels", &options.labels.right_labels);
@@ -84,6 +85,7 @@ std::string LabelRunOptionsToYaml(const LabelRunOptions& options) {
       << "  max_disparity_stddev: " << l.max_disparity_stddev << "\n"
       << "  max_mean_energy: " << l.max_mean_energy << "\n"
       << "  max_stereo_energy: " << l.max_stereo_energy << "\n"
+      << "  max_stereo_energy_ratio: " << l.max_stereo_energy_ratio << "\n"
       << "  future_keyframes: " << l.future_keyframes << "\n"
       << "  past_keyframes: " << l.past_keyframes << "\n"
       << "  right_labels: " << (l.right_labels ? "true" : "false") << "\n"

@@ -40,12 +40,17 @@ struct LabelOptions {
   double max_disparity_stddev = 1e9;
   double max_mean_energy = 1e9;      // mean photometric energy over the point's active residuals
   double max_stereo_energy = 1e9;    // energy of its static stereo residual (ignored when it has none)
+  // The same relative to the image: a point whose static stereo energy exceeds this multiple of
+  // the median over its keyframe's labelled points is not labelled. A pattern straddling a
+  // silhouette (the main wrong label, docs/labels.md) matches the pair worse than the points
+  // inside surfaces; relative to the median, the test follows the sensor noise of the images.
+  double max_stereo_energy_ratio = 1.5;
   // Keyframes created after a frame whose points also label it (forward motion keeps
   // them in view); 0 = only the window the frame was tracked against. More hosts mean
   // more labels; wrong projections are caught by the stereo check on the frame's own pair.
-  int future_keyframes = 12;
+  int future_keyframes = 18;
   // Keyframes marginalised before a frame was tracked whose points also label it.
-  int past_keyframes = 6;
+  int past_keyframes = 9;
   // Also label each keyframe with its own candidates whose static stereo match converged
   // (vo::OdometryObserver::OnKeyframeCandidates): the points DSO never activates because
   // they leave the view before the next keyframe, i.e. near objects at the side. They

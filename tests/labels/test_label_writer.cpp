@@ -142,6 +142,39 @@ TEST(LabelWriter, KeyframeCandidatesLabelOnlyTheirOwnKeyframe) {
   }
 }
 
+TEST(LabelWriter, StereoEnergyFarAboveTheKeyframesMedianIsNotALabel) {
+  // Keyframe 0's points, marginalised in two batches (points leaving the view early, then the
+  // rest with the keyframe): five with static stereo energies 10-14 (the median, 12, is the
+  // keyframe's typical match quality), one at 40 (a pattern straddling a silhouette matches
+  // worse on the pair: a wrong label in the label worlds) and one without a stereo residual.
+  auto with_energy = [](int u, float stereo_energy) {
+    vo::PointInfo p = Point(0, static_cast<float>(u), 10, 0.1, 3);
+    p.stereo_energy = stereo_energy;
+    return p;
+  };
+  for (const double ratio : {1e9, 1.5, 3.5}) {
+    const std::string out = TempDir() + "_stereo_ratio_" + std::to_string(static_cast<int>(ratio * 10));
+    std::map<int, cv::Mat> seen;
+    LabelOptions options;
+    options.future_keyframes = 0;
+    options.max_stereo_energy_ratio = ratio;
+    LabelWriter writer(Camera(), options, out, [&](int i, const cv::Mat& m) { seen[i] = m.clone(); });
+    writer.OnWindowOptimized(Window(0, {{0, Eigen::Isometry3d::Identity()}}));
+    writer.OnFrameTracked(Tracked(0, 0));
+    writer.OnPointsMarginalized({with_energy(4, 10.f), with_energy(8, 40.f), with_energy(12, 11.f)});
+    Marginalize(&writer, 0, Eigen::Isometry3d::Identity(),
+                {with_energy(16, 12.f), with_energy(20, 13.f), with_energy(24, 14.f), with_energy(28, -1.f)});
+    writer.OnFinished();
+    ASSERT_TRUE(seen.count(0));
+    // 1.5 x 12 = 18: only the point at 40 goes; 3.5 x 12 = 42 and "off" keep it.
+    EXPECT_EQ(seen[0].at<float>(10, 8) > 0.f, ratio > 3.4) << ratio;
+    for (const int u : {4, 12, 16, 20, 24, 28}) EXPECT_GT(seen[0].at<float>(10, u), 0.f) << ratio << " u=" << u;
+  }
+  LabelOptions bad;
+  bad.max_stereo_energy_ratio = 0;
+  EXPECT_THROW(bad.Check(), Error);
+}
+
 TEST(LabelWriter, ResumeKeepsExistingFiles) {
   const std::string out = TempDir() + "_resume";
   fs::create_directories(out);
