@@ -87,7 +87,8 @@ void AddAblationCommand(CLI::App& app) {
   auto* cmd = app.add_subcommand("ablation", "DVSO ablation (paper Table 3) on one sequence with ground truth");
   AddExperimentOptions(cmd, &args->experiment, /*many_sequences=*/false);
   cmd->add_option("--tuned-baseline", args->tuned_baseline,
-                  "b_v for the tb rows (metres); default: grid search on this sequence");
+                  "b_v for the tb rows (metres); default: grid search on this sequence")
+      ->check(Positive());
   cmd->add_option("--tune-values", args->tune_values, "Grid for that search, start:step:end (default: +-20 %)");
   cmd->callback([args] { Run(*args); });
 }

@@ -19,7 +19,7 @@ namespace {
 namespace fs = std::filesystem;
 
 struct EvalLabelsArgs {
-  std::string labels_dir, gt_dir, images_dir;
+  std::string labels_dir, gt_dir, images_dir, pictures_dir;
   bool json = false;
   labels::LabelErrorKindOptions kinds;
 };
@@ -28,11 +28,14 @@ void Run(const EvalLabelsArgs& args) {
   args.kinds.Check();
   RequireFile(fs::is_directory(args.labels_dir), args.labels_dir, "not a folder");
   RequireFile(fs::is_directory(args.gt_dir), args.gt_dir, "not a folder");
+  if (!args.images_dir.empty()) RequireFile(fs::is_directory(args.images_dir), args.images_dir, "not a folder");
+  Require(args.pictures_dir.empty() || !args.images_dir.empty(), "--pictures needs --images (the pictures draw on them)");
   std::vector<fs::path> files;
   for (const auto& entry : fs::directory_iterator(args.labels_dir))
     if (entry.path().extension() == ".png") files.push_back(entry.path());
   std::sort(files.begin(), files.end());
   RequireFile(!files.empty(), args.labels_dir, "no .png label maps");
+  if (!args.pictures_dir.empty()) fs::create_directories(args.pictures_dir);
   labels::LabelStatistics statistics;
   labels::LabelErrorBreakdown breakdown(args.kinds);
   for (const auto& file : files) {
@@ -44,9 +47,15 @@ void Run(const EvalLabelsArgs& args) {
     cv::Mat image;
     if (!args.images_dir.empty()) {
       const fs::path image_path = fs::path(args.images_dir) / file.filename();
+      RequireFile(fs::exists(image_path), image_path.string(), "no image for label map " + file.string());
       image = cv::imread(image_path.string(), cv::IMREAD_GRAYSCALE);
       RequireFile(!image.empty(), image_path.string(), "cannot read image");
       RequireFile(image.size() == label_map.size(), image_path.string(), "size differs from " + file.string());
+    }
+    if (!args.pictures_dir.empty()) {
+      const std::string picture = (fs::path(args.pictures_dir) / file.filename()).string();
+      RequireFile(cv::imwrite(picture, labels::RenderLabelErrors(label_map, gt, image, args.kinds.wrong_threshold)),
+                  picture, "cannot write");
     }
     statistics.AddFrame(label_map, gt);
     breakdown.AddFrame(label_map, gt, image);
@@ -73,6 +82,9 @@ void AddEvalLabelsCommand(CLI::App& app) {
       ->required();
   cmd->add_option("--gt", args->gt_dir, "folder of GT disparity maps with the same file names")->required();
   cmd->add_option("--images", args->images_dir, "folder of the left images with the same names (low-texture kind)");
+  cmd->add_option("--pictures", args->pictures_dir,
+                  "write one PNG per frame into this folder: the image with right labels green, wrong ones red "
+                  "(needs --images)");
   cmd->add_option("--wrong-threshold", args->kinds.wrong_threshold, "px: a label farther from the GT is wrong")
       ->capture_default_str();
   cmd->add_option("--far-fraction", args->kinds.far_fraction, "far = GT disparity below this fraction of the width")

@@ -1,5 +1,6 @@
 // `dvso eval-odometry`: KITTI t_rel / r_rel, ATE and RPE of an estimated
 // trajectory against ground truth (core/eval_odometry.h; docs/evaluation.md).
+#include <filesystem>
 #include <iostream>
 #include <memory>
 
@@ -11,6 +12,8 @@
 namespace dvso::cli {
 
 namespace {
+
+namespace fs = std::filesystem;
 
 struct EvalOdometryArgs {
   std::string gt_path, est_path, gt_times_path, est_times_path, plot_dir;
@@ -28,6 +31,11 @@ Trajectory LoadTrajectory(const std::string& path, const std::string& times_path
 void Run(EvalOdometryArgs& args) {
   args.options.align = ParseAlignmentMode(args.align);
   args.options.Check();
+  // Before any metric is printed: a run must not end in an error after its output.
+  if (!args.plot_dir.empty()) {
+    RequireFile(!fs::exists(args.plot_dir) || fs::is_directory(args.plot_dir), args.plot_dir,
+                "--plot-dir exists and is not a folder");
+  }
   const Trajectory gt = LoadTrajectory(args.gt_path, args.gt_times_path);
   const Trajectory est = LoadTrajectory(args.est_path, args.est_times_path);
   if (!args.json) {

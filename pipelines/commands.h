@@ -7,6 +7,24 @@
 
 namespace dvso::cli {
 
+// Option checks with a one-line message (CLI11's own ranges print their double limits in full).
+inline CLI::Validator Positive() {
+  return CLI::Validator(
+      [](std::string& value) {
+        double number = 0;
+        return CLI::detail::lexical_cast(value, number) && number > 0 ? std::string() : "must be > 0, got " + value;
+      },
+      "> 0");
+}
+inline CLI::Validator NonNegative() {
+  return CLI::Validator(
+      [](std::string& value) {
+        double number = 0;
+        return CLI::detail::lexical_cast(value, number) && number >= 0 ? std::string() : "must be >= 0, got " + value;
+      },
+      ">= 0");
+}
+
 void AddDemoCommand(CLI::App& app);          // cmd_demo.cpp
 void AddSimulateCommand(CLI::App& app);      // cmd_simulate.cpp
 void AddEvalOdometryCommand(CLI::App& app);  // cmd_eval_odometry.cpp

@@ -6,6 +6,7 @@
 
 #include "core/error.h"
 #include "core/fs_util.h"
+#include "pipelines/commands.h"
 
 namespace dvso::cli {
 
@@ -25,7 +26,8 @@ void AddPredictionOptions(CLI::App* cmd, PredictionSourceArgs* args, const std::
                   "(N,H,W) normalised by width");
   cmd->add_option("--disparity-right", args->disparity_right, "dvso: precomputed D^R (same format)");
   cmd->add_option("--virtual-baseline", args->virtual_baseline,
-                  "dvso: b_v in metres (default: from the model's training camera, or the sequence's baseline for files)");
+                  "dvso: b_v in metres (default: from the model's training camera, or the sequence's baseline for files)")
+      ->check(Positive());
   cmd->add_option("--prediction-schedule", args->schedule,
                   "dvso: keyframe-async (a keyframe's prediction runs on a worker while the next frames are tracked) | "
                   "keyframe-blocking (tracking waits for it: deterministic) | speculative (every frame predicted while "

@@ -34,7 +34,8 @@ void AddExportCommand(CLI::App& app) {
                   "Instead of exporting: copy this exported .pt to --out with the training camera metadata")
       ->check(CLI::ExistingFile);
   cmd->add_option("--tuned-baseline", args->tuned_baseline,
-                  "With --stamp: the tuned virtual baseline (paper 'tb', training camera, metres; 0 = none)");
+                  "With --stamp: the tuned virtual baseline (paper 'tb', training camera, metres; 0 = none)")
+      ->check(NonNegative());
   cmd->add_option("--tuned-on", args->tuned_on, "With --stamp and --tuned-baseline: the sequence it was tuned on");
   cmd->add_option("--config-name", args->config_name,
                   "With --stamp: the name of the training config (models exported before it was recorded)");

@@ -5,6 +5,8 @@
 #include <iomanip>
 #include <sstream>
 
+#include <opencv2/imgproc.hpp>
+
 #include "core/error.h"
 
 namespace dvso::labels {
@@ -78,6 +80,34 @@ double MeanGradient(const cv::Mat& image, int x, int y, int radius) {
 }
 
 }  // namespace
+
+cv::Mat RenderLabelErrors(const cv::Mat& labels, const cv::Mat& ground_truth, const cv::Mat& image,
+                          double wrong_threshold) {
+  Require(labels.type() == CV_32F && ground_truth.type() == CV_32F && labels.size() == ground_truth.size(),
+          "RenderLabelErrors: labels and GT must be CV_32F maps of one size");
+  Require(image.type() == CV_8UC1 && image.size() == labels.size(), "RenderLabelErrors: image must be grey, same size");
+  const cv::Scalar kRight(0, 200, 0), kWrong(0, 0, 255), kNoGroundTruth(0, 220, 220);  // BGR
+  constexpr int kRightRadius = 1, kWrongRadius = 2;  // wrong labels drawn last and larger: they are the few
+  cv::Mat picture;
+  cv::cvtColor(image, picture, cv::COLOR_GRAY2BGR);
+  std::vector<cv::Point> wrong;
+  for (int y = 0; y < labels.rows; ++y) {
+    for (int x = 0; x < labels.cols; ++x) {
+      const float label = labels.at<float>(y, x);
+      if (!(label > 0.f)) continue;
+      const float gt = ground_truth.at<float>(y, x);
+      if (!(gt > 0.f)) {
+        cv::circle(picture, {x, y}, kRightRadius, kNoGroundTruth, cv::FILLED);
+      } else if (std::abs(label - gt) > wrong_threshold) {
+        wrong.emplace_back(x, y);
+      } else {
+        cv::circle(picture, {x, y}, kRightRadius, kRight, cv::FILLED);
+      }
+    }
+  }
+  for (const cv::Point& p : wrong) cv::circle(picture, p, kWrongRadius, kWrong, cv::FILLED);
+  return picture;
+}
 
 LabelSceneKind ClassifyLabelPlace(const cv::Mat& ground_truth, const cv::Mat& image, int x, int y,
                                   const LabelErrorKindOptions& options) {

@@ -43,6 +43,12 @@ struct LabelErrorKindOptions {
 LabelSceneKind ClassifyLabelPlace(const cv::Mat& ground_truth, const cv::Mat& image, int x, int y,
                                   const LabelErrorKindOptions& options);
 
+// A picture of one frame's labels for people to look at: the grey `image` (CV_8UC1)
+// in colour with every label that has a GT value drawn as a dot, green when within
+// `wrong_threshold` px of the GT, red (larger) when wrong; labels without GT in yellow.
+cv::Mat RenderLabelErrors(const cv::Mat& labels, const cv::Mat& ground_truth, const cv::Mat& image,
+                          double wrong_threshold);
+
 // Counts labels and wrong labels per kind over frames.
 class LabelErrorBreakdown {
  public:

@@ -8,6 +8,7 @@
 
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 
 #include "core/disparity_io.h"
 #include "tests/dvso_cli_runner.h"
@@ -47,6 +48,20 @@ TEST(Cli, MissingTrajectoryFileIsOneClearError) {
   EXPECT_NE(r.out.find("dvso: error:"), std::string::npos) << r.out;
 }
 
+TEST(Cli, NonPositiveBaselinesAreRejectedNotIgnored) {
+  // 0 used to mean "not given" inside: `--virtual-baseline 0` silently took the model's b_v.
+  const std::string dir = TempDir("baselines");
+  std::ofstream(dir + "/gt.txt") << "1 0 0 0 0 1 0 0 0 0 1 0\n";
+  for (const std::string& args : {"odometry --virtual-baseline 0 --mode dvso --sequence " + dir + " --out " + dir + "/o",
+                                 "odometry --virtual-baseline -0.5 --mode dvso --sequence " + dir + " --out " + dir + "/o",
+                                 "ablation --tuned-baseline -1 --sequence " + dir + " --gt " + dir + "/gt.txt"}) {
+    const CliRun r = RunDvso(args);
+    EXPECT_NE(r.exit_code, 0) << args;
+    EXPECT_NE(r.out.find("baseline"), std::string::npos) << args << "\n" << r.out;
+    EXPECT_FALSE(fs::exists(dir + "/o")) << args;
+  }
+}
+
 TEST(Cli, MalformedTrajectoryIsOneClearError) {
   const std::string dir = TempDir("malformed");
   std::ofstream(dir + "/gt.txt") << "1 0 0 0 0 1 0 0 0 0 1 0\n";
@@ -54,6 +69,16 @@ TEST(Cli, MalformedTrajectoryIsOneClearError) {
   const CliRun r = RunDvso("eval-odometry --gt " + dir + "/gt.txt --est " + dir + "/est.txt");
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.out.find("est.txt"), std::string::npos) << r.out;
+}
+
+TEST(Cli, EvalOdometryPlotDirThatIsAFileFailsBeforeAnyMetric) {
+  const std::string dir = TempDir("plotfile");
+  std::ofstream(dir + "/gt.txt") << "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 0 0 1 0 0 0 0 1 1\n";
+  std::ofstream(dir + "/plots") << "a file\n";
+  const CliRun r = RunDvso("eval-odometry --gt " + dir + "/gt.txt --est " + dir + "/gt.txt --plot-dir " + dir + "/plots");
+  EXPECT_EQ(r.exit_code, 1) << r.out;
+  EXPECT_NE(r.out.find("plots"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("t_rel"), std::string::npos) << r.out;  // no metrics printed first
 }
 
 TEST(Cli, OdometryOnMissingSequenceFailsCleanly) {
@@ -88,6 +113,27 @@ TEST(Cli, EvalLabelsCountsWrongLabelsByPlaceAndNamesAMissingGroundTruth) {
   const CliRun missing = RunDvso("eval-labels --labels " + dir + "/labels --gt " + dir + "/gt");
   EXPECT_EQ(missing.exit_code, 1);
   EXPECT_NE(missing.out.find("000001.png"), std::string::npos) << missing.out;
+
+  // A missing image is the same one-line error (no OpenCV warning before it), a missing folder too.
+  fs::remove(dir + "/labels/000001.png");
+  fs::create_directories(dir + "/images");
+  const CliRun no_image = RunDvso("eval-labels --labels " + dir + "/labels --gt " + dir + "/gt --images " + dir + "/images");
+  EXPECT_EQ(no_image.exit_code, 1);
+  EXPECT_NE(no_image.out.find("images/000000.png"), std::string::npos) << no_image.out;
+  EXPECT_EQ(no_image.out.find("WARN"), std::string::npos) << no_image.out;
+  const CliRun no_folder = RunDvso("eval-labels --labels " + dir + "/labels --gt " + dir + "/gt --images " + dir + "/nope");
+  EXPECT_EQ(no_folder.exit_code, 1);
+  EXPECT_NE(no_folder.out.find("nope"), std::string::npos) << no_folder.out;
+
+  // Pictures of the labels on the images (wrong labels red).
+  cv::imwrite(dir + "/images/000000.png", cv::Mat(10, 40, CV_8UC1, cv::Scalar(90)));
+  const CliRun pictures = RunDvso("eval-labels --labels " + dir + "/labels --gt " + dir + "/gt --images " + dir +
+                                  "/images --pictures " + dir + "/pictures");
+  ASSERT_EQ(pictures.exit_code, 0) << pictures.out;
+  const cv::Mat picture = cv::imread(dir + "/pictures/000000.png");
+  ASSERT_FALSE(picture.empty());
+  EXPECT_EQ(picture.at<cv::Vec3b>(5, 21), cv::Vec3b(0, 0, 255));  // the wrong label on the pole
+  EXPECT_NE(RunDvso("eval-labels --labels " + dir + "/labels --gt " + dir + "/gt --pictures " + dir + "/p2").exit_code, 0);
 }
 
 TEST(Cli, ShorterSimulationIntoTheSameFolderLeavesNoStaleFrames) {

@@ -2,6 +2,7 @@
 // whose kind at each pixel is known by construction.
 #include <gtest/gtest.h>
 
+#include "core/error.h"
 #include "sdso_labels/label_error_kinds.h"
 
 namespace dvso::labels {
@@ -88,3 +89,22 @@ TEST(LabelErrorKinds, RejectsBadOptionsAndMismatchedMaps) {
 
 }  // namespace
 }  // namespace dvso::labels
+
+TEST(LabelErrorKinds, PictureShowsRightLabelsGreenAndWrongOnesRed) {
+  cv::Mat gt(20, 40, CV_32F, cv::Scalar(10.f)), labels(20, 40, CV_32F, cv::Scalar(0.f));
+  gt.at<float>(15, 35) = 0.f;       // no GT there
+  labels.at<float>(5, 5) = 10.5f;   // right (0.5 px off)
+  labels.at<float>(10, 20) = 12.f;  // wrong (2 px off)
+  labels.at<float>(15, 35) = 7.f;   // no GT to compare with
+  const cv::Mat image(20, 40, CV_8UC1, cv::Scalar(100));
+  const cv::Mat picture = dvso::labels::RenderLabelErrors(labels, gt, image, 1.0);
+  ASSERT_EQ(picture.type(), CV_8UC3);
+  EXPECT_EQ(picture.at<cv::Vec3b>(5, 5), cv::Vec3b(0, 200, 0));
+  EXPECT_EQ(picture.at<cv::Vec3b>(10, 20), cv::Vec3b(0, 0, 255));
+  EXPECT_EQ(picture.at<cv::Vec3b>(10, 22), cv::Vec3b(0, 0, 255));  // wrong labels are drawn larger
+  EXPECT_EQ(picture.at<cv::Vec3b>(15, 35), cv::Vec3b(0, 220, 220));
+  EXPECT_EQ(picture.at<cv::Vec3b>(0, 39), cv::Vec3b(100, 100, 100));  // the image elsewhere
+  // With a 3 px threshold the 2 px label is right.
+  EXPECT_EQ(dvso::labels::RenderLabelErrors(labels, gt, image, 3.0).at<cv::Vec3b>(10, 20), cv::Vec3b(0, 200, 0));
+  EXPECT_THROW(dvso::labels::RenderLabelErrors(labels, gt, cv::Mat(), 1.0), dvso::Error);
+}
