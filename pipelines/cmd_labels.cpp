@@ -38,6 +38,9 @@ void RunLabels(const LabelsArgs& args) {
   options.progress = !args.quiet;
   options.worker_thread = args.worker_thread;
   options.Check();
+  // Right GT without right labels would be read by nothing: say so instead of ignoring it.
+  Require(options.labels.right_labels || (args.gt_disparity_right.empty() && args.gt_subdir_right.empty()),
+          "--gt-disparity-right / --gt-subdir-right need --right-labels (or labels.right_labels: true in --config)");
   if (!args.json) {
     std::cout << "# dvso labels configuration" << (args.config.empty() ? " (preset " + args.preset + ")" : " (" + args.config + ")")
               << "\n" << labels::LabelRunOptionsToYaml(options) << std::endl;

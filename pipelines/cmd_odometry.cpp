@@ -41,6 +41,10 @@ void Run(const OdometryArgs& args) {
   } else {
     Require(args.predictions.model.empty() && args.predictions.disparity_left.empty(),
             "--model / --disparity-left/right need --mode dvso");
+    // Not an error: scripts pass one set of extra options to every mode (benchmarks/run_dvso.sh).
+    if (args.predictions.virtual_baseline > 0 || !args.predictions.schedule.empty()) {
+      std::cerr << "dvso: note: --virtual-baseline / --prediction-schedule only act in --mode dvso; ignored\n";
+    }
   }
   std::cout << "dvso odometry: " << args.sequence << " (" << sequence->size() << " frames, " << cam.left.width << "x"
             << cam.left.height << ", fx " << cam.left.fx << ", baseline " << cam.baseline << " m)\n"

@@ -102,11 +102,11 @@ void AddSimulateCommand(CLI::App& app) {
   cmd->add_option("--speed", o.generated_speed, "speed of the generated path (m/s)")->capture_default_str();
   cmd->add_option("--width", args->width, "image width (intrinsics scaled from KITTI 00-02)");
   cmd->add_option("--height", args->height, "image height (intrinsics scaled from KITTI 00-02)");
-  cmd->add_option("--fx", args->fx, "focal length x (px), overrides");
-  cmd->add_option("--fy", args->fy, "focal length y (px), overrides");
-  cmd->add_option("--cx", args->cx, "principal point x (px), overrides");
-  cmd->add_option("--cy", args->cy, "principal point y (px), overrides");
-  cmd->add_option("--baseline", args->baseline, "stereo baseline (m), default 0.537");
+  cmd->add_option("--fx", args->fx, "focal length x (px), overrides")->check(Positive());
+  cmd->add_option("--fy", args->fy, "focal length y (px), overrides")->check(Positive());
+  cmd->add_option("--cx", args->cx, "principal point x (px), overrides")->check(NonNegative());
+  cmd->add_option("--cy", args->cy, "principal point y (px), overrides")->check(NonNegative());
+  cmd->add_option("--baseline", args->baseline, "stereo baseline (m), default 0.537")->check(Positive());
   cmd->add_option("--camera-height", o.camera_height, "camera height above the road (m)")->capture_default_str();
   cmd->add_flag("--no-exposure-drift", args->no_exposure, "constant exposure (no per-frame gain/bias drift)");
   cmd->add_option("--exposure-sigma", o.exposure_sigma, "per-frame log-gain random-walk std")->capture_default_str();

@@ -5,6 +5,8 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
@@ -48,18 +50,31 @@ TEST(Cli, MissingTrajectoryFileIsOneClearError) {
   EXPECT_NE(r.out.find("dvso: error:"), std::string::npos) << r.out;
 }
 
-TEST(Cli, NonPositiveBaselinesAreRejectedNotIgnored) {
-  // 0 used to mean "not given" inside: `--virtual-baseline 0` silently took the model's b_v.
+TEST(Cli, OutOfRangeCameraValuesAreRejectedNotIgnored) {
+  // 0 / -1 used to mean "not given" inside: `--virtual-baseline 0` silently took the model's b_v,
+  // `simulate --cx -5` the KITTI principal point.
   const std::string dir = TempDir("baselines");
   std::ofstream(dir + "/gt.txt") << "1 0 0 0 0 1 0 0 0 0 1 0\n";
-  for (const std::string& args : {"odometry --virtual-baseline 0 --mode dvso --sequence " + dir + " --out " + dir + "/o",
-                                 "odometry --virtual-baseline -0.5 --mode dvso --sequence " + dir + " --out " + dir + "/o",
-                                 "ablation --tuned-baseline -1 --sequence " + dir + " --gt " + dir + "/gt.txt"}) {
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"odometry --virtual-baseline 0 --mode dvso --sequence " + dir + " --out " + dir + "/o", "--virtual-baseline"},
+      {"odometry --virtual-baseline -0.5 --mode dvso --sequence " + dir + " --out " + dir + "/o", "--virtual-baseline"},
+      {"ablation --tuned-baseline -1 --sequence " + dir + " --gt " + dir + "/gt.txt", "--tuned-baseline"},
+      {"simulate --cx -5 --out " + dir + "/o", "--cx"},
+      {"simulate --baseline 0 --out " + dir + "/o", "--baseline"}};
+  for (const auto& [args, option] : cases) {
     const CliRun r = RunDvso(args);
     EXPECT_NE(r.exit_code, 0) << args;
-    EXPECT_NE(r.out.find("baseline"), std::string::npos) << args << "\n" << r.out;
+    EXPECT_NE(r.out.find(option + ": must be"), std::string::npos) << args << "\n" << r.out;
     EXPECT_FALSE(fs::exists(dir + "/o")) << args;
   }
+}
+
+TEST(Cli, RightGroundTruthWithoutRightLabelsIsAnError) {
+  const std::string dir = TempDir("right_gt");
+  const CliRun r = RunDvso("labels --sequence " + dir + " --out " + dir + "/l --gt-disparity-right " + dir);
+  EXPECT_EQ(r.exit_code, 1) << r.out;
+  EXPECT_NE(r.out.find("--right-labels"), std::string::npos) << r.out;
+  EXPECT_FALSE(fs::exists(dir + "/l"));
 }
 
 TEST(Cli, MalformedTrajectoryIsOneClearError) {
