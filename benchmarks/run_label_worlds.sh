@@ -26,7 +26,9 @@ mkdir -p "$OUT"
 for world in $WORLDS; do
   IFS=: read -r style poses first seed sim_args <<< "$world"
   IFS=, read -r -a SIM_EXTRA <<< "${sim_args:-}"
-  name="${style}_${poses}_${seed}"
+  # Another look of the same world gets its own folder (the arguments, made file-name safe).
+  suffix="${sim_args//[^A-Za-z0-9.]/}"
+  name="${style}_${poses}_${seed}${suffix:+_$suffix}"
   seq="$OUT/$name"
   if [[ ! -f "$seq/simulation.yaml" ]]; then
     echo "[$(date -u +%H:%M:%S)] simulate $name ($COUNT frames)"
@@ -42,14 +44,16 @@ for world in $WORLDS; do
 done
 
 python3 - "$OUT" $WORLDS <<'EOF'
-import json, sys
+import json, re, sys
 out, worlds = sys.argv[1], sys.argv[2:]
 kinds = ["thin", "depth_edge", "far", "low_texture", "other"]
 rows, result = [], {}
 for w in worlds:
     style, poses, first, seed = w.split(":")[:4]
-    look = " ".join([style] + (w.split(":")[4].split(",") if w.count(":") > 3 else []))
-    name = f"{style}_{poses}_{seed}"
+    sim_args = w.split(":", 4)[4] if w.count(":") > 3 else ""
+    look = " ".join([style] + (sim_args.split(",") if sim_args else []))
+    suffix = re.sub(r"[^A-Za-z0-9.]", "", sim_args)
+    name = f"{style}_{poses}_{seed}" + (f"_{suffix}" if suffix else "")
     j = json.load(open(f"{out}/{name}.eval.json"))
     secs = float(open(f"{out}/{name}.labels.seconds").read().split()[-1])
     result[name] = dict(j, labels_seconds=secs)

@@ -30,6 +30,11 @@ void Run(const EvalLabelsArgs& args) {
   RequireFile(fs::is_directory(args.gt_dir), args.gt_dir, "not a folder");
   if (!args.images_dir.empty()) RequireFile(fs::is_directory(args.images_dir), args.images_dir, "not a folder");
   Require(args.pictures_dir.empty() || !args.images_dir.empty(), "--pictures needs --images (the pictures draw on them)");
+  if (!args.pictures_dir.empty() && fs::exists(args.pictures_dir)) {
+    for (const std::string& input : {args.labels_dir, args.gt_dir, args.images_dir}) {
+      Require(!fs::equivalent(args.pictures_dir, input), "--pictures must not be an input folder: " + input);
+    }
+  }
   std::vector<fs::path> files;
   for (const auto& entry : fs::directory_iterator(args.labels_dir))
     if (entry.path().extension() == ".png") files.push_back(entry.path());

@@ -40,6 +40,7 @@ LabelRunOptions LoadLabelRunOptions(const std::string& path) {
   labels.Read("max_mean_energy", &options.labels.max_mean_energy);
   labels.Read("max_stereo_energy", &options.labels.max_stereo_energy);
   labels.Read("max_stereo_energy_ratio", &options.labels.max_stereo_energy_ratio);
+  labels.Read("stereo_energy_ratio_floor", &options.labels.stereo_energy_ratio_floor);
   labels.Read("future_keyframes", &options.labels.future_keyframes);
   labels.Read("past_keyframes", &options.labels.past_keyframes);
   labels.Read("right_labels", &options.labels.right_labels);
@@ -86,6 +87,7 @@ std::string LabelRunOptionsToYaml(const LabelRunOptions& options) {
       << "  max_mean_energy: " << l.max_mean_energy << "\n"
       << "  max_stereo_energy: " << l.max_stereo_energy << "\n"
       << "  max_stereo_energy_ratio: " << l.max_stereo_energy_ratio << "\n"
+      << "  stereo_energy_ratio_floor: " << l.stereo_energy_ratio_floor << "\n"
       << "  future_keyframes: " << l.future_keyframes << "\n"
       << "  past_keyframes: " << l.past_keyframes << "\n"
       << "  right_labels: " << (l.right_labels ? "true" : "false") << "\n"

@@ -20,8 +20,8 @@ LabelProducerOptions ProducerOptions(const LabelOptions& options, bool worker_th
   return producer;
 }
 
-// ratio x the median static stereo energy over `points` that have one (+inf when none has).
-double MaxRelativeStereoEnergy(const std::vector<vo::PointInfo>& points, double ratio) {
+// max(ratio x the median static stereo energy over `points` that have one, floor); +inf when none has.
+double MaxRelativeStereoEnergy(const std::vector<vo::PointInfo>& points, double ratio, double floor) {
   std::vector<float> energies;
   for (const auto& p : points) {
     if (p.stereo_energy >= 0) energies.push_back(p.stereo_energy);
@@ -29,7 +29,7 @@ double MaxRelativeStereoEnergy(const std::vector<vo::PointInfo>& points, double 
   if (energies.empty()) return std::numeric_limits<double>::infinity();
   auto middle = energies.begin() + energies.size() / 2;
   std::nth_element(energies.begin(), middle, energies.end());
-  return ratio * *middle;
+  return std::max(ratio * *middle, floor);
 }
 
 const LabelOptions& Checked(const LabelOptions& options) {
@@ -65,6 +65,7 @@ void LabelOptions::Check() const {
   Require(max_disparity_stddev > 0, "labels: max_disparity_stddev must be > 0");
   Require(max_mean_energy > 0 && max_stereo_energy > 0, "labels: energy thresholds must be > 0");
   Require(max_stereo_energy_ratio > 0, "labels: max_stereo_energy_ratio must be > 0");
+  Require(stereo_energy_ratio_floor >= 0, "labels: stereo_energy_ratio_floor must be >= 0");
   Require(future_keyframes >= 0 && future_keyframes <= 50, "labels: future_keyframes must be in [0, 50]");
   Require(past_keyframes >= 0 && past_keyframes <= 50, "labels: past_keyframes must be in [0, 50]");
   stereo_check.Check();
@@ -173,7 +174,8 @@ void LabelWriter::OnKeyframeMarginalized(const vo::KeyframeInfo& keyframe) {
     Host& host = it->second;
     host.final = true;
     host.T_world_camera = keyframe.T_world_camera;
-    const double max_stereo_energy = MaxRelativeStereoEnergy(host.points, options_.max_stereo_energy_ratio);
+    const double max_stereo_energy = MaxRelativeStereoEnergy(host.points, options_.max_stereo_energy_ratio,
+                                                                options_.stereo_energy_ratio_floor);
     // Re-derive the world points from the host's final pose.
     host.world.reserve(host.points.size());
     for (const auto& p : host.points) {

@@ -45,6 +45,10 @@ struct LabelOptions {
   // silhouette (the main wrong label, docs/labels.md) matches the pair worse than the points
   // inside surfaces; relative to the median, the test follows the sensor noise of the images.
   double max_stereo_energy_ratio = 1.5;
+  // ... but never below this energy: 8 pattern pixels x (2 grey levels)^2, a match as good as a
+  // clean camera gives (on noise-free images the median is near 0 and the ratio alone would drop
+  // points for interpolation errors).
+  double stereo_energy_ratio_floor = 32;
   // Keyframes created after a frame whose points also label it (forward motion keeps
   // them in view); 0 = only the window the frame was tracked against. More hosts mean
   // more labels; wrong projections are caught by the stereo check on the frame's own pair.

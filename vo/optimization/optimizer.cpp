@@ -152,6 +152,11 @@ int Window::RemoveOutliers() {
   int removed = 0;
   for (Keyframe& kf : keyframes_) {
     for (Point& p : kf.points) {
+      for (const Residual& r : p.residuals) {
+        if (r.kind == ResidualKind::kStaticStereo && r.state == ResidualState::kOutlier) {
+          p.rejected_stereo_energy = r.energy;
+        }
+      }
       p.residuals.erase(std::remove_if(p.residuals.begin(), p.residuals.end(),
                                        [](const Residual& r) { return r.state != ResidualState::kActive; }),
                         p.residuals.end());

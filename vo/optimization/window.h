@@ -102,6 +102,10 @@ struct Point {
   float idepth_hessian = 0.0f;          // H_dd over the active residuals at the last linearisation (information on d)
   float idepth_hessian_temporal = 0.0f; // the part of idepth_hessian from temporal residuals (multi-view parallax)
   std::vector<Residual> residuals;
+  // Energy of its static stereo residual when RemoveOutliers() dropped it as an outlier, -1 if it
+  // did not: a point can live on through its temporal residuals after its stereo match failed, and
+  // the labels must still see how badly it matched (sdso_labels max_stereo_energy[_ratio]).
+  float rejected_stereo_energy = -1.0f;
 };
 
 struct Keyframe {
@@ -137,7 +141,7 @@ struct MarginalizedPoint {
   float idepth_hessian = 0.0f;          // information on the inverse depth (H_dd, all active residuals)
   float idepth_hessian_temporal = 0.0f; // the part of it from temporal residuals only
   float mean_energy = 0.0f;             // mean energy over its active residuals
-  float stereo_energy = -1.0f;          // energy of its static stereo residual, -1 if none / not active
+  float stereo_energy = -1.0f;          // energy of its static stereo residual (also when rejected as an outlier), -1 if none
 };
 
 struct OptimizationSummary {

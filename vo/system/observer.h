@@ -56,7 +56,7 @@ struct PointInfo {
   int num_residuals = 0;       // all residuals (incl. stereo kinds)
   float idepth_hessian = 0;    // information on the inverse depth (H_dd over active residuals)
   float mean_energy = 0;       // mean energy over its active residuals at the last evaluation
-  float stereo_energy = -1;    // energy of its static stereo residual, -1 if none / not active
+  float stereo_energy = -1;    // energy of its static stereo residual (also when rejected as an outlier), -1 if none
 };
 
 struct KeyframeInfo {

@@ -235,9 +235,11 @@ PointInfo System::MakePointInfo(const Keyframe& host, const Point& point) const 
   info.world = host.world_to_camera.inverse() * (camera_.left.Unproject(point.u, point.v) / point.idepth);
   info.num_residuals = static_cast<int>(point.residuals.size());
   info.idepth_hessian = point.idepth_hessian;
+  info.stereo_energy = point.rejected_stereo_energy;
   int active = 0;
   double energy = 0;
   for (const Residual& r : point.residuals) {
+    if (r.kind == ResidualKind::kStaticStereo && r.state == ResidualState::kOutlier) info.stereo_energy = r.energy;
     if (r.state != ResidualState::kActive) continue;
     ++active;
     energy += r.energy;
