@@ -3,6 +3,8 @@
 // depths back to the truth; static or virtual stereo residuals fix the scale.
 #include <gtest/gtest.h>
 
+#include <set>
+
 #include "tests/vo/test_backend_util.h"
 #include "vo/optimization/window.h"
 
@@ -157,6 +159,42 @@ TEST(BackendOptimizer, RemoveOutliersDropsCorruptedPoints) {
   for (const Point& p : sw.window->keyframe(0).points) {
     for (const Residual& r : p.residuals) EXPECT_EQ(r.state, ResidualState::kActive);
   }
+}
+
+TEST(BackendOptimizer, RemoveOutliersKeepsTheRejectedStereoEnergyOfSurvivingPoints) {
+  // Keyframe 0's right image is replaced by a black one: every static stereo residual it hosts
+  // becomes an outlier while the temporal ones (exact poses and depths) stay active. The points
+  // survive on their temporal residuals and must remember how badly they matched on the pair
+  // (the labels' stereo-energy filters read it, sdso_labels/label_writer.h).
+  WindowOptions options;
+  SceneWindowSpec spec;
+  spec.stereo = true;
+  auto sw = BuildSceneWindow(options, spec);
+  Keyframe& host = sw.window->mutable_keyframes()[0];
+  std::set<int> with_stereo;  // points whose static stereo residual fits the image (not out of bounds)
+  for (const Point& p : host.points) {
+    for (const Residual& r : p.residuals) {
+      if (r.kind == ResidualKind::kStaticStereo && r.state == ResidualState::kActive) with_stereo.insert(p.id);
+    }
+  }
+  host.right = testing::MakePyramid(cv::Mat(sw.camera.left.height, sw.camera.left.width, CV_32FC1, cv::Scalar(0.f)),
+                                    sw.camera.left);
+  sw.window->Optimize(2);  // evaluates every residual with the new image (as after each keyframe)
+  sw.window->RemoveOutliers();
+  const float outlier_energy = kPatternSize * static_cast<float>(options.outlier_energy_threshold);
+  int survivors = 0, remembered = 0;
+  for (const Point& p : sw.window->keyframe(0).points) {
+    for (const Residual& r : p.residuals) EXPECT_NE(r.kind, ResidualKind::kStaticStereo);
+    if (with_stereo.count(p.id) == 0) continue;
+    ++survivors;
+    if (p.rejected_stereo_energy > outlier_energy) ++remembered;
+  }
+  // A few points' stereo patterns leave the image while the two iterations move their depths
+  // (out of bounds is not an outlier); every other survivor remembers its rejected match.
+  EXPECT_GT(survivors, 50);
+  EXPECT_GE(remembered, 0.9 * survivors) << remembered << " of " << survivors;
+  // Keyframe 1's pair is intact: its points keep their stereo residual and reject nothing.
+  for (const Point& p : sw.window->keyframe(1).points) EXPECT_EQ(p.rejected_stereo_energy, -1.0f);
 }
 
 }  // namespace
