@@ -39,7 +39,6 @@ void Run(SimulateArgs& args) {
   if (args.cx >= 0) o.camera.left.cx = args.cx;
   if (args.cy >= 0) o.camera.left.cy = args.cy;
   if (args.baseline > 0) o.camera.baseline = args.baseline;
-  Require(args.fx >= 0 && args.fy >= 0 && args.baseline >= 0, "--fx, --fy and --baseline must be positive");
   o.exposure_drift = !args.no_exposure;
   o.vignetting = !args.no_vignetting;
   o.noise = !args.no_noise;

@@ -8,22 +8,18 @@
 namespace dvso::cli {
 
 // Option checks with a one-line message (CLI11's own ranges print their double limits in full).
-inline CLI::Validator Positive() {
+inline CLI::Validator SignCheck(bool zero_allowed) {
+  const std::string rule = zero_allowed ? ">= 0" : "> 0";
   return CLI::Validator(
-      [](std::string& value) {
+      [zero_allowed, rule](std::string& value) {
         double number = 0;
-        return CLI::detail::lexical_cast(value, number) && number > 0 ? std::string() : "must be > 0, got " + value;
+        const bool ok = CLI::detail::lexical_cast(value, number) && (number > 0 || (zero_allowed && number == 0));
+        return ok ? std::string() : "must be " + rule + ", got " + value;
       },
-      "> 0");
+      rule);
 }
-inline CLI::Validator NonNegative() {
-  return CLI::Validator(
-      [](std::string& value) {
-        double number = 0;
-        return CLI::detail::lexical_cast(value, number) && number >= 0 ? std::string() : "must be >= 0, got " + value;
-      },
-      ">= 0");
-}
+inline CLI::Validator Positive() { return SignCheck(/*zero_allowed=*/false); }
+inline CLI::Validator NonNegative() { return SignCheck(/*zero_allowed=*/true); }
 
 void AddDemoCommand(CLI::App& app);          // cmd_demo.cpp
 void AddSimulateCommand(CLI::App& app);      // cmd_simulate.cpp

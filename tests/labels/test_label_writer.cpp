@@ -79,6 +79,17 @@ void Marginalize(LabelWriter* writer, int id, const Eigen::Isometry3d& pose, con
   writer->OnKeyframeMarginalized({id, pose, 0, 0});
 }
 
+// Every map the writer produces, by frame index.
+LabelSink Collect(std::map<int, cv::Mat>* maps) {
+  return [maps](int i, const cv::Mat& m) { (*maps)[i] = m.clone(); };
+}
+
+// Frame 0 becomes keyframe 0, alone in the window (how most tests below start).
+void StartAtKeyframeZero(LabelWriter* writer) {
+  writer->OnWindowOptimized(Window(0, {{0, Eigen::Isometry3d::Identity()}}));
+  writer->OnFrameTracked(Tracked(0, 0));
+}
+
 }  // namespace
 
 TEST(LabelWriter, WritesWhenKeyframesAreFinalWithFinalPoses) {
@@ -86,11 +97,10 @@ TEST(LabelWriter, WritesWhenKeyframesAreFinalWithFinalPoses) {
   std::map<int, cv::Mat> seen;
   LabelOptions options;
   options.future_keyframes = 0;  // only the window at tracking time (later keyframes: next test)
-  LabelWriter writer(Camera(), options, out, [&](int i, const cv::Mat& m) { seen[i] = m.clone(); });
+  LabelWriter writer(Camera(), options, out, Collect(&seen));
 
   // Frame 0: keyframe, window = {0}; frame 1 tracked 1 m ahead of it.
-  writer.OnWindowOptimized(Window(0, {{0, Eigen::Isometry3d::Identity()}}));
-  writer.OnFrameTracked(Tracked(0, 0));
+  StartAtKeyframeZero(&writer);
   writer.OnFrameTracked(Tracked(1, 0, Forward(1.0)));
   EXPECT_EQ(writer.frames_written(), 0);  // keyframe 0 is not final yet
   EXPECT_FALSE(fs::exists(out + "/000000.png"));
@@ -123,9 +133,8 @@ TEST(LabelWriter, KeyframeCandidatesLabelOnlyTheirOwnKeyframe) {
     LabelOptions options;
     options.future_keyframes = 0;
     options.keyframe_candidates = enabled;
-    LabelWriter writer(Camera(), options, out, [&](int i, const cv::Mat& m) { seen[i] = m.clone(); });
-    writer.OnWindowOptimized(Window(0, {{0, Eigen::Isometry3d::Identity()}}));
-    writer.OnFrameTracked(Tracked(0, 0));
+    LabelWriter writer(Camera(), options, out, Collect(&seen));
+    StartAtKeyframeZero(&writer);
     // Keyframe 0's stereo-matched candidates: one 2 m away (never activated: it would leave the
     // view), one 100 m away (beyond max_depth: not a label).
     writer.OnKeyframeCandidates(0, {Point(0, 5, 5, 0.5, 0), Point(0, 35, 15, 0.01, 0)});
@@ -164,9 +173,8 @@ TEST(LabelWriter, StereoEnergyFarAboveTheKeyframesMedianIsNotALabel) {
     LabelOptions options;
     options.future_keyframes = 0;
     options.max_stereo_energy_ratio = ratio;
-    LabelWriter writer(Camera(), options, out, [&](int i, const cv::Mat& m) { seen[i] = m.clone(); });
-    writer.OnWindowOptimized(Window(0, {{0, Eigen::Isometry3d::Identity()}}));
-    writer.OnFrameTracked(Tracked(0, 0));
+    LabelWriter writer(Camera(), options, out, Collect(&seen));
+    StartAtKeyframeZero(&writer);
     writer.OnPointsMarginalized({with_energy(4, 100.f), with_energy(8, 400.f), with_energy(12, 110.f)});
     Marginalize(&writer, 0, Eigen::Isometry3d::Identity(),
                 {with_energy(16, 120.f), with_energy(20, 130.f), with_energy(24, 140.f), with_energy(28, -1.f)});
@@ -186,9 +194,8 @@ TEST(LabelWriter, StereoEnergyFarAboveTheKeyframesMedianIsNotALabel) {
   std::map<int, cv::Mat> clean;
   LabelOptions options;
   options.future_keyframes = 0;
-  LabelWriter writer(Camera(), options, clean_out, [&](int i, const cv::Mat& m) { clean[i] = m.clone(); });
-  writer.OnWindowOptimized(Window(0, {{0, Eigen::Isometry3d::Identity()}}));
-  writer.OnFrameTracked(Tracked(0, 0));
+  LabelWriter writer(Camera(), options, clean_out, Collect(&clean));
+  StartAtKeyframeZero(&writer);
   Marginalize(&writer, 0, Eigen::Isometry3d::Identity(),
               {with_energy(4, 1.f), with_energy(8, 20.f), with_energy(12, 2.f), with_energy(16, 3.f), with_energy(20, 4.f)});
   writer.OnFinished();
@@ -259,9 +266,8 @@ TEST(LabelWriter, SilhouettePointOnTheBackgroundPixelIsDroppedByItsStereoEnergy)
     LabelOptions options;
     options.future_keyframes = 0;
     options.max_stereo_energy_ratio = ratio;
-    LabelWriter writer(camera, options, out, [&](int i, const cv::Mat& m) { seen[i] = m.clone(); });
-    writer.OnWindowOptimized(Window(0, {{0, Eigen::Isometry3d::Identity()}}));
-    writer.OnFrameTracked(Tracked(0, 0));
+    LabelWriter writer(camera, options, out, Collect(&seen));
+    StartAtKeyframeZero(&writer);
     Marginalize(&writer, 0, Eigen::Isometry3d::Identity(), points);
     writer.OnFinished();
     ASSERT_TRUE(seen.count(0));
@@ -308,9 +314,8 @@ TEST(LabelWriter, LaterKeyframesAlsoLabelEarlierFrames) {
   std::map<int, cv::Mat> seen;
   LabelOptions options;
   options.future_keyframes = 1;
-  LabelWriter writer(Camera(), options, out, [&](int i, const cv::Mat& m) { seen[i] = m.clone(); });
-  writer.OnWindowOptimized(Window(0, {{0, Eigen::Isometry3d::Identity()}}));
-  writer.OnFrameTracked(Tracked(0, 0));
+  LabelWriter writer(Camera(), options, out, Collect(&seen));
+  StartAtKeyframeZero(&writer);
   // Keyframe 0 leaves without points: frame 0 must still wait for one later keyframe.
   Marginalize(&writer, 0, Eigen::Isometry3d::Identity(), {});
   EXPECT_EQ(writer.frames_written(), 0);
@@ -330,7 +335,7 @@ TEST(LabelWriter, PastKeyframesLabelLaterFramesAndMemoryStaysBounded) {
   LabelOptions options;
   options.future_keyframes = 0;
   options.past_keyframes = 2;
-  LabelWriter writer(Camera(), options, out, [&](int i, const cv::Mat& m) { seen[i] = m.clone(); });
+  LabelWriter writer(Camera(), options, out, Collect(&seen));
   // A sliding window of one keyframe per frame, moving 0.1 m per frame; keyframe k
   // hosts one point 10 m ahead of it on the optical axis.
   const int frames = 30;
@@ -363,9 +368,8 @@ TEST(LabelWriter, ResetDropsOldMapKeyframes) {
   LabelOptions options;
   options.future_keyframes = 3;
   options.past_keyframes = 3;
-  LabelWriter writer(Camera(), options, out, [&](int i, const cv::Mat& m) { seen[i] = m.clone(); });
-  writer.OnWindowOptimized(Window(0, {{0, Eigen::Isometry3d::Identity()}}));
-  writer.OnFrameTracked(Tracked(0, 0));
+  LabelWriter writer(Camera(), options, out, Collect(&seen));
+  StartAtKeyframeZero(&writer);
   Marginalize(&writer, 0, Eigen::Isometry3d::Identity(), {Point(0, 20, 10, 0.1, 3)});
   writer.OnReset(1);
   // The new map's keyframe 2 sits at the same world origin but must not label frame 0,
@@ -443,8 +447,8 @@ TEST(LabelProducer, RightLabelsSeeThePointsFromTheRightCamera) {
   std::map<int, cv::Mat> left_maps, right_maps;
   LabelProducerOptions options;
   options.right_labels = true;
-  LabelProducer producer(Camera(), options, out, [&](int i, const cv::Mat& m) { left_maps[i] = m.clone(); }, {},
-                         [&](int i, const cv::Mat& m) { right_maps[i] = m.clone(); });
+  LabelProducer producer(Camera(), options, out, Collect(&left_maps), {},
+                         Collect(&right_maps));
   LabelJob job;
   job.frame_index = 3;
   job.has_pose = true;

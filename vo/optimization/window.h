@@ -108,6 +108,15 @@ struct Point {
   float rejected_stereo_energy = -1.0f;
 };
 
+// Energy of `point`'s static stereo residual at the last evaluation (active or outlier), else the
+// one RemoveOutliers() rejected; -1 if it has none (or it left the image). What the labels filter on.
+inline float StaticStereoEnergy(const Point& point) {
+  for (const Residual& r : point.residuals) {
+    if (r.kind == ResidualKind::kStaticStereo && r.state != ResidualState::kOutOfBounds) return r.energy;
+  }
+  return point.rejected_stereo_energy;
+}
+
 struct Keyframe {
   int id = -1;
   Eigen::Isometry3d world_to_camera = Eigen::Isometry3d::Identity();  // current estimate T_cw

@@ -25,15 +25,13 @@ MarginalizedPoint Window::DescribeLeavingPoint(int host_index, int point_index) 
   const Keyframe& host = keyframes_[host_index];
   const Point& p = host.points[point_index];
   MarginalizedPoint out;
-  out.stereo_energy = p.rejected_stereo_energy;
+  out.stereo_energy = StaticStereoEnergy(p);
   int active = 0;
   for (const Residual& r : p.residuals) {
-    if (r.kind == ResidualKind::kStaticStereo && r.state == ResidualState::kOutlier) out.stereo_energy = r.energy;
     if (r.state != ResidualState::kActive) continue;
     out.num_residuals += r.kind == ResidualKind::kTemporal;
     ++active;
     out.mean_energy += r.energy;
-    if (r.kind == ResidualKind::kStaticStereo) out.stereo_energy = r.energy;
   }
   if (active > 0) out.mean_energy /= active;
   out.idepth_hessian = p.idepth_hessian;

@@ -235,16 +235,14 @@ PointInfo System::MakePointInfo(const Keyframe& host, const Point& point) const 
   info.world = host.world_to_camera.inverse() * (camera_.left.Unproject(point.u, point.v) / point.idepth);
   info.num_residuals = static_cast<int>(point.residuals.size());
   info.idepth_hessian = point.idepth_hessian;
-  info.stereo_energy = point.rejected_stereo_energy;
+  info.stereo_energy = StaticStereoEnergy(point);
   int active = 0;
   double energy = 0;
   for (const Residual& r : point.residuals) {
-    if (r.kind == ResidualKind::kStaticStereo && r.state == ResidualState::kOutlier) info.stereo_energy = r.energy;
     if (r.state != ResidualState::kActive) continue;
     ++active;
     energy += r.energy;
     if (r.kind == ResidualKind::kTemporal) ++info.num_good_residuals;
-    if (r.kind == ResidualKind::kStaticStereo) info.stereo_energy = r.energy;
   }
   info.mean_energy = active > 0 ? static_cast<float>(energy / active) : 0.f;
   return info;
