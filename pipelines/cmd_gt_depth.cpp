@@ -104,14 +104,21 @@ void AddGtDepthCommand(CLI::App& app) {
       "KITTI raw drive: Velodyne scans projected into a rectified camera (nearest point per pixel, points behind "
       "dropped) as KITTI depth PNGs (m * 256), the Eigen-split depth GT of monodepth's generate_depth_map "
       "(0-based pixels: monodepth's maps are shifted by one pixel left and up)");
-  cmd->add_option("--sequence", args->drive_dir, "drive folder with velodyne_points/data/*.bin (sync) or *.txt (extract)");
-  cmd->add_option("--split", args->split_path,
+  auto* sequence = cmd->add_option("--sequence", args->drive_dir,
+                                   "drive folder with velodyne_points/data/*.bin (sync) or *.txt (extract)");
+  auto* split = cmd->add_option("--split", args->split_path,
                   "instead of --sequence: the frames of a split file ('<drive> <frame> <side>'), written as %06d.png "
                   "in split order, side l in camera 2, r in camera 3 (for eval-depth --split)");
-  cmd->add_option("--raw-root", args->raw_root, "with --split: the folder holding the date folders");
+  // Options of the other mode are errors, not silently ignored: each split line names its camera.
+  cmd->add_option("--raw-root", args->raw_root, "with --split: the folder holding the date folders")
+      ->needs(split)
+      ->excludes(sequence);
   cmd->add_option("--out", args->out_dir, "output folder (one PNG per scan, named like it)")->required();
-  cmd->add_option("--camera", args->camera, "rectified camera: 2 (colour left, the network's) or 0 (grey left)")
-      ->capture_default_str();
+  cmd->add_option("--camera", args->camera,
+                  "with --sequence: rectified camera 2 (colour left, the network's) or 0 (grey left); a split "
+                  "line's side picks it with --split")
+      ->capture_default_str()
+      ->excludes(split);
   cmd->add_flag("--quiet", args->quiet, "no progress bar");
   cmd->callback([args] { Run(*args); });
 }

@@ -42,7 +42,6 @@ void RunPredict(const PredictArgs& args) {
   stacknet::TorchDisparityPredictor predictor(args.model, options);
   std::cout << "Model " << args.model << " (network input " << predictor.input_width() << "x"
             << predictor.input_height() << ")" << (args.options.post_process ? ", post-processing on" : "") << "\n";
-  for (const char* sub : {"left", "right", "left_color", "right_color"}) EnsureDirectory(JoinPath(args.out, sub));
   std::unique_ptr<SequenceReader> sequence;
   std::vector<std::string> files;
   if (!args.sequence.empty()) {
@@ -66,6 +65,11 @@ void RunPredict(const PredictArgs& args) {
                   "two images share this name (outputs keep the input names)");
   }
   const int count = sequence ? sequence->size() : static_cast<int>(files.size());
+  // Output folders only once the inputs are known to be usable (a typo leaves nothing behind).
+  for (const char* sub : {"left", "right"}) EnsureDirectory(JoinPath(args.out, sub));
+  if (!args.no_color) {
+    for (const char* sub : {"left_color", "right_color"}) EnsureDirectory(JoinPath(args.out, sub));
+  }
   auto read = [&](int i) {
     cv::Mat image;
     if (sequence) {

@@ -111,5 +111,18 @@ TEST(KittiVelodyne, BadScanIsOneClearError) {
   EXPECT_NE(run.out.find("velodyne_points"), std::string::npos) << run.out;
 }
 
+// Options of the other mode (a drive vs a split file) are errors, not silently ignored.
+TEST(KittiVelodyne, GtDepthRefusesOptionsOfTheOtherMode) {
+  TempDir tmp("velo_options");
+  const std::string out = " --out " + (tmp.path / "gt").string();
+  testing::CliRun run = testing::RunDvso("gt-depth --split s.txt --raw-root r --camera 0" + out);
+  EXPECT_NE(run.exit_code, 0);
+  EXPECT_NE(run.out.find("--camera"), std::string::npos) << run.out;
+  run = testing::RunDvso("gt-depth --sequence " + tmp.path.string() + " --raw-root r" + out);
+  EXPECT_NE(run.exit_code, 0);
+  EXPECT_NE(run.out.find("--raw-root"), std::string::npos) << run.out;
+  EXPECT_FALSE(fs::exists(tmp.path / "gt"));
+}
+
 }  // namespace
 }  // namespace dvso

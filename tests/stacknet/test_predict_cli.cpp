@@ -75,6 +75,18 @@ TEST_F(PredictCli, TwoImagesWithTheSameNameAreAnError) {
   WriteImage("a.png", 64, 32);
   WriteImage("a.jpg", 64, 32);
   EXPECT_NE(Predict("--no-color"), 0);
+  EXPECT_FALSE(fs::exists(dir_ / "out")) << "output folders made for inputs that were refused";
+}
+
+TEST_F(PredictCli, EmptyImageFolderLeavesNoOutputAndNoColorMakesNoPreviewFolders) {
+  EXPECT_NE(Predict(), 0);  // no images
+  EXPECT_FALSE(fs::exists(dir_ / "out"));
+  WriteImage("a.png", 64, 32);
+  ASSERT_EQ(Predict("--no-color"), 0);
+  EXPECT_TRUE(fs::exists(dir_ / "out" / "left" / "a.png"));
+  EXPECT_TRUE(fs::exists(dir_ / "out" / "right" / "a.png"));
+  EXPECT_FALSE(fs::exists(dir_ / "out" / "left_color"));
+  EXPECT_FALSE(fs::exists(dir_ / "out" / "right_color"));
 }
 
 // On a KITTI raw drive the network sees the colour pair and the maps are named like the drive's frames
