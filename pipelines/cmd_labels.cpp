@@ -95,6 +95,10 @@ void RunLabels(const LabelsArgs& args) {
                   << " (image decoding " << summary.image_read_ms_per_frame << " with " << summary.image_rereads
                   << " pairs read twice, not included; labels on "
                   << (summary.worker_thread ? "a worker thread" : "the odometry thread") << ")\n";
+        if (summary.kept_existing_frames > 0) {
+          std::cout << "resumed:                kept " << summary.kept_existing_frames
+                    << " existing label files (--overwrite rewrites them); the statistics above are of the files\n";
+        }
       }
       std::cout << std::flush;
     }

@@ -127,6 +127,7 @@ nlohmann::json LabelRunSummary::ToJson() const {
     }
   }
   if (!skipped_complete) {
+    j["kept_existing_frames"] = kept_existing_frames;
     j["odometry_ms_per_frame"] = odometry_ms_per_frame;
     j["labels_ms_per_frame"] = labels_ms_per_frame;
     j["labels_on_worker_thread"] = worker_thread;
@@ -186,20 +187,37 @@ LabelRunSummary RunLabelExtraction(const std::string& sequence_dir, const std::s
       }
     }
   } else {
+    // A partial resume keeps the files already there (LabelProducer writes only missing ones): the
+    // statistics must then describe those files, not the maps this run computed for them.
+    std::vector<bool> kept(end - options.first, false), kept_right(end - options.first, false);
+    for (int i = options.first; !options.labels.overwrite && i < end; ++i) {
+      kept[i - options.first] = fs::exists(LabelProducer::LabelPath(out_dir, i));
+      kept_right[i - options.first] = options.labels.right_labels && fs::exists(LabelProducer::LabelPath(out_dir, i, true));
+      summary.kept_existing_frames += kept[i - options.first];
+    }
+    const auto as_on_disk = [&](int frame_index, const cv::Mat& labels, bool right) {
+      const std::vector<bool>& existed = right ? kept_right : kept;
+      const int k = frame_index - options.first;
+      return k >= 0 && k < static_cast<int>(existed.size()) && existed[k]
+                 ? ReadKittiMapPng(LabelProducer::LabelPath(out_dir, frame_index, right))
+                 : labels;
+    };
     PairCachingReader reader(*sequence, static_cast<size_t>(options.image_cache_pairs));
     double evaluation_ms = 0;
     LabelWriter writer(
         sequence->camera(), options.labels, out_dir,
         [&](int frame_index, const cv::Mat& labels) {
           const auto start = std::chrono::steady_clock::now();
-          summary.statistics.AddFrame(labels, GroundTruth(options.gt_disparity_dir, frame_index));
+          summary.statistics.AddFrame(as_on_disk(frame_index, labels, false),
+                                      GroundTruth(options.gt_disparity_dir, frame_index));
           evaluation_ms += MsSince(start);
         },
         [&](int frame_index, cv::Mat* left, cv::Mat* right) { reader.Take(frame_index, left, right); },
         options.worker_thread,
         [&](int frame_index, const cv::Mat& labels) {
           const auto start = std::chrono::steady_clock::now();
-          summary.right_statistics.AddFrame(labels, GroundTruth(options.gt_disparity_right_dir, frame_index));
+          summary.right_statistics.AddFrame(as_on_disk(frame_index, labels, true),
+                                            GroundTruth(options.gt_disparity_right_dir, frame_index));
           evaluation_ms += MsSince(start);
         });
     vo::SequenceRunOptions run;

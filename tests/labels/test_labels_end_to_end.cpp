@@ -78,11 +78,18 @@ TEST(LabelsEndToEnd, EveryFrameLabelledAndAccurateThenResumes) {
   fs::remove(JoinPath(out, "right/000007.png"));
   EXPECT_FALSE(labels::RunLabelExtraction(seq, out, options).skipped_complete);
   EXPECT_TRUE(fs::exists(JoinPath(out, "right/000007.png")));
-  // A missing file makes the run incomplete again: it is recomputed.
+  // A missing file makes the run incomplete again: it is recomputed, the files already there are
+  // kept, and the statistics are those of the files on disk (frame 3 emptied by hand: 0 labels).
   fs::remove(JoinPath(out, FrameFileName(5, ".png")));
+  const std::string frame3 = JoinPath(out, FrameFileName(3, ".png"));
+  WriteKittiMapPng(frame3, cv::Mat::zeros(128, 416, CV_32FC1));
   const labels::LabelRunSummary third = labels::RunLabelExtraction(seq, out, options);
   EXPECT_FALSE(third.skipped_complete);
   EXPECT_TRUE(fs::exists(JoinPath(out, FrameFileName(5, ".png"))));
+  EXPECT_EQ(third.kept_existing_frames, kFrames - 1);
+  EXPECT_EQ(cv::countNonZero(ReadKittiMapPng(frame3)), 0) << "an existing file was rewritten";
+  EXPECT_EQ(third.statistics.min_labels_per_frame(), 0) << "statistics of computed maps, not of the files";
+  EXPECT_GT(third.statistics.mean_labels_per_frame(), 500.0);
 }
 
 TEST(LabelsEndToEnd, BatchListAndErrors) {
