@@ -45,6 +45,24 @@ std::string RawName(int index, const std::string& extension) {
   return FrameFileName(index, extension, kRawNameDigits);
 }
 
+// Removes the frame files (%010d.png/.bin/.txt) of `dir` left by an earlier, longer (or colour) run into
+// the same drive folder: a reader would take them for frames of this one.
+void RemoveFrameFiles(const std::string& dir) {
+  namespace fs = std::filesystem;
+  if (!fs::is_directory(dir)) return;
+  std::vector<fs::path> stale;
+  for (const auto& entry : fs::directory_iterator(dir)) {
+    const std::string stem = entry.path().stem().string();
+    const std::string ext = entry.path().extension().string();
+    const bool numbered = stem.size() == kRawNameDigits &&
+                          stem.find_first_not_of("0123456789") == std::string::npos;
+    if (entry.is_regular_file() && numbered && (ext == ".png" || ext == ".bin" || ext == ".txt")) {
+      stale.push_back(entry.path());
+    }
+  }
+  for (const fs::path& path : stale) fs::remove(path);
+}
+
 void WriteText(const std::string& path, const std::function<void(std::ostream&)>& body) {
   WriteAtomically(path, [&](const std::string& temp) {
     std::ofstream out(temp);
@@ -289,6 +307,18 @@ KittiRawDriveSummary WriteKittiRawDrive(const std::string& sequence_dir, const s
   summary.drive_dir = JoinPath(date_dir, drive_name);
   summary.color = sequence->has_color();
   const int cameras = summary.color ? 4 : 2;
+  for (const char* data : {"image_00/data", "image_01/data", "image_02/data", "image_03/data", "velodyne_points/data",
+                           "oxts/data"}) {
+    RemoveFrameFiles(JoinPath(summary.drive_dir, data));
+  }
+  // A grey rerun after a colour one: the colour cameras' folders go too (their presence means colour).
+  for (int id = cameras; id < 4; ++id) {
+    const std::string camera_dir = JoinPath(summary.drive_dir, "image_0" + std::to_string(id));
+    std::error_code ignored;  // a folder holding files of someone else's stays (remove() only takes empty ones)
+    std::filesystem::remove(JoinPath(camera_dir, "timestamps.txt"), ignored);
+    std::filesystem::remove(JoinPath(camera_dir, "data"), ignored);
+    std::filesystem::remove(camera_dir, ignored);
+  }
   for (int id = 0; id < cameras; ++id) EnsureDirectory(JoinPath(summary.drive_dir, "image_0" + std::to_string(id) + "/data"));
   EnsureDirectory(JoinPath(summary.drive_dir, "velodyne_points/data"));
   EnsureDirectory(JoinPath(summary.drive_dir, "oxts/data"));

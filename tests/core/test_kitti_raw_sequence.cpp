@@ -341,6 +341,29 @@ TEST_F(SyncDrive, ColourPairRunsTheOdometry) {
   EXPECT_NE(wrong.out.find("image_2"), std::string::npos) << wrong.out;
 }
 
+// A second, shorter grey run into the same drive folder leaves no frame of the first behind (a reader
+// would take them for frames of this drive): images, colour cameras, scans and OXTS packets.
+TEST(KittiRawSequence, ShorterRerunIntoTheSameDriveLeavesNoStaleFrames) {
+  const std::string dir = testing::ScratchDir("kitti_raw_rerun");
+  const std::string raw = dir + "/raw";
+  const std::string common = " --width 160 --height 64 --texture-size 64 --raw-layout sync --raw-out " + raw;
+  ASSERT_EQ(testing::RunDvso("simulate --quiet --out " + dir + "/long --count 6 --color" + common).exit_code, 0);
+  const fs::path drive = fs::path(raw) / "2011_09_26/2011_09_26_drive_0001_sync";
+  ASSERT_TRUE(fs::exists(drive / "image_02/data/0000000005.png")) << drive;
+  ASSERT_EQ(testing::RunDvso("simulate --quiet --out " + dir + "/short --count 3" + common).exit_code, 0);
+  const auto count = [](const fs::path& folder) {
+    if (!fs::is_directory(folder)) return 0;
+    return static_cast<int>(std::distance(fs::directory_iterator(folder), fs::directory_iterator()));
+  };
+  EXPECT_EQ(count(drive / "image_00/data"), 3);
+  EXPECT_EQ(count(drive / "image_01/data"), 3);
+  EXPECT_FALSE(fs::exists(drive / "image_02")) << "a grey drive with colour folders reads as colour";
+  EXPECT_FALSE(fs::exists(drive / "image_03"));
+  EXPECT_EQ(count(drive / "velodyne_points/data"), 3);
+  EXPECT_EQ(count(drive / "oxts/data"), 3);
+  EXPECT_EQ(OpenSequence(drive.string())->size(), 3);
+}
+
 TEST(KittiRawSequence, ExtractDriveIsRectifiedOnReadAndPairedByTimestamp) {
   // The right cameras lose every 9th frame (9, 18, 27, 36).
   const std::string dir_name = testing::FreshSimulatedSequence(
