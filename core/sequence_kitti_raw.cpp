@@ -26,6 +26,7 @@
 
 #include "core/error.h"
 #include "core/fs_util.h"
+#include "core/kitti_oxts.h"
 #include "core/kitti_raw_calibration.h"
 #include "core/sequence.h"
 #include "core/sequence_common.h"
@@ -284,16 +285,9 @@ class KittiRawSequence : public SequenceReader {
       const std::string same_name = JoinPath(other.dir, fs::path(left.files[i]).filename().string());
       return fs::exists(same_name) ? same_name : "";
     }
-    const auto next = std::lower_bound(other.times.begin(), other.times.end(), left.times[i]);
-    size_t best = other.times.size();
-    for (auto it : {next - (next != other.times.begin() ? 1 : 0), next}) {
-      if (it == other.times.end()) continue;
-      const size_t j = static_cast<size_t>(it - other.times.begin());
-      if (best == other.times.size() || std::abs(other.times[j] - left.times[i]) < std::abs(other.times[best] - left.times[i])) {
-        best = j;
-      }
-    }
-    if (best == other.times.size() || std::abs(other.times[best] - left.times[i]) >= kMaxPairingGap) return "";
+    if (other.times.empty()) return "";
+    const size_t best = NearestTimestamp(other.times, left.times[i]);  // the search `oxts-poses` pairs with too
+    if (std::abs(other.times[best] - left.times[i]) >= kMaxPairingGap) return "";
     return other.files[best];
   }
 
