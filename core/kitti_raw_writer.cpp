@@ -307,18 +307,28 @@ KittiRawDriveSummary WriteKittiRawDrive(const std::string& sequence_dir, const s
   summary.drive_dir = JoinPath(date_dir, drive_name);
   summary.color = sequence->has_color();
   const int cameras = summary.color ? 4 : 2;
-  for (const char* data : {"image_00/data", "image_01/data", "image_02/data", "image_03/data", "velodyne_points/data",
-                           "oxts/data"}) {
-    RemoveFrameFiles(JoinPath(summary.drive_dir, data));
+  namespace fs = std::filesystem;
+  const std::string marker = JoinPath(summary.drive_dir, kSimulatedDriveMarker);
+  if (fs::is_directory(summary.drive_dir) && !fs::is_empty(summary.drive_dir)) {
+    RequireFile(fs::exists(marker), summary.drive_dir,
+                "exists and was not written by `dvso simulate` (no " + std::string(kSimulatedDriveMarker) +
+                    "); not overwritten: choose another --raw-out");
+    // An earlier simulation's drive: remove its frames and timestamps (a shorter or grey rerun would
+    // otherwise leave frames a reader takes for this drive's, and a run stopped halfway must still
+    // look incomplete: timestamps are written last).
+    for (const char* sensor : {"image_00", "image_01", "image_02", "image_03", "velodyne_points", "oxts"}) {
+      const std::string sensor_dir = JoinPath(summary.drive_dir, sensor);
+      RemoveFrameFiles(JoinPath(sensor_dir, "data"));
+      std::error_code ignored;  // folders that hold other files stay (remove() only takes empty ones)
+      fs::remove(JoinPath(sensor_dir, "timestamps.txt"), ignored);
+      fs::remove(JoinPath(sensor_dir, "data"), ignored);
+      fs::remove(sensor_dir, ignored);
+    }
   }
-  // A grey rerun after a colour one: the colour cameras' folders go too (their presence means colour).
-  for (int id = cameras; id < 4; ++id) {
-    const std::string camera_dir = JoinPath(summary.drive_dir, "image_0" + std::to_string(id));
-    std::error_code ignored;  // a folder holding files of someone else's stays (remove() only takes empty ones)
-    std::filesystem::remove(JoinPath(camera_dir, "timestamps.txt"), ignored);
-    std::filesystem::remove(JoinPath(camera_dir, "data"), ignored);
-    std::filesystem::remove(camera_dir, ignored);
-  }
+  EnsureDirectory(summary.drive_dir);
+  WriteText(marker, [&](std::ostream& out) {
+    out << "Simulated KITTI raw drive written by `dvso simulate --raw-layout`; a rerun into this folder replaces it.\n";
+  });
   for (int id = 0; id < cameras; ++id) EnsureDirectory(JoinPath(summary.drive_dir, "image_0" + std::to_string(id) + "/data"));
   EnsureDirectory(JoinPath(summary.drive_dir, "velodyne_points/data"));
   EnsureDirectory(JoinPath(summary.drive_dir, "oxts/data"));

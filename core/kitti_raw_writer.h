@@ -75,6 +75,9 @@ struct KittiRawDriveOptions {
   void Check() const;
 };
 
+// File in a drive folder written by WriteKittiRawDrive: only such a folder is ever overwritten.
+inline constexpr const char* kSimulatedDriveMarker = "dvso_simulated_drive.txt";
+
 struct KittiRawDriveSummary {
   std::string drive_dir;        // ROOT/DATE/DATE_drive_NNNN_FLAVOUR
   int frames = 0;               // frames of the left camera
@@ -84,8 +87,11 @@ struct KittiRawDriveSummary {
 };
 
 // Writes the drive of the simulated sequence `sequence_dir` under `raw_root` (created if needed).
-// Throws dvso::Error naming the file when the sequence lacks depth_0/, poses.txt or images, or
-// when the distortion would leave part of a rectified image outside its raw image.
+// A drive folder of an earlier simulation (marked by kSimulatedDriveMarker) is replaced: its frame
+// files and timestamps are removed first, so a shorter or grey rerun leaves nothing of it behind.
+// Throws dvso::Error naming the file when the sequence lacks depth_0/, poses.txt or images, when
+// the distortion would leave part of a rectified image outside its raw image, or when the drive
+// folder exists without the marker (e.g. a real KITTI drive of the same name: never touched).
 KittiRawDriveSummary WriteKittiRawDrive(const std::string& sequence_dir, const std::string& raw_root,
                                         const KittiRawDriveOptions& options, bool show_progress = false);
 

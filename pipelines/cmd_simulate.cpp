@@ -137,7 +137,9 @@ void AddSimulateCommand(CLI::App& app) {
                   "also write the sequence as a KITTI raw drive: sync (rectified) or extract (distorted, "
                   "unrectified), with Velodyne scans, OXTS packets and calibration (core/kitti_raw_writer.h)")
       ->capture_default_str();
-  cmd->add_option("--raw-out", args->raw_out, "root of the raw date folder (default OUT/kitti_raw)");
+  cmd->add_option("--raw-out", args->raw_out,
+                  "root of the raw date folder (default OUT/kitti_raw); a drive folder an earlier simulation wrote "
+                  "there is replaced, any other existing one is refused");
   cmd->add_option("--raw-drop-every", args->raw_drop_every,
                   "extract drives: the right cameras lose every n-th frame (0 = none)")
       ->capture_default_str();

@@ -342,7 +342,8 @@ TEST_F(SyncDrive, ColourPairRunsTheOdometry) {
 }
 
 // A second, shorter grey run into the same drive folder leaves no frame of the first behind (a reader
-// would take them for frames of this drive): images, colour cameras, scans and OXTS packets.
+// would take them for frames of this drive): images, colour cameras, scans and OXTS packets; a folder
+// without the simulation's marker is refused.
 TEST(KittiRawSequence, ShorterRerunIntoTheSameDriveLeavesNoStaleFrames) {
   const std::string dir = testing::ScratchDir("kitti_raw_rerun");
   const std::string raw = dir + "/raw";
@@ -362,6 +363,12 @@ TEST(KittiRawSequence, ShorterRerunIntoTheSameDriveLeavesNoStaleFrames) {
   EXPECT_EQ(count(drive / "velodyne_points/data"), 3);
   EXPECT_EQ(count(drive / "oxts/data"), 3);
   EXPECT_EQ(OpenSequence(drive.string())->size(), 3);
+  // A drive folder that no simulation wrote (a real KITTI drive of the same name) is never touched.
+  fs::remove(drive / "dvso_simulated_drive.txt");
+  const testing::CliRun refused = testing::RunDvso("simulate --quiet --out " + dir + "/again --count 2" + common);
+  EXPECT_NE(refused.exit_code, 0);
+  EXPECT_NE(refused.out.find("not written by `dvso simulate`"), std::string::npos) << refused.out;
+  EXPECT_EQ(count(drive / "image_00/data"), 3);
 }
 
 TEST(KittiRawSequence, ExtractDriveIsRectifiedOnReadAndPairedByTimestamp) {
