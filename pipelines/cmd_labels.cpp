@@ -97,7 +97,8 @@ void RunLabels(const LabelsArgs& args) {
                   << (summary.worker_thread ? "a worker thread" : "the odometry thread") << ")\n";
         if (summary.kept_existing_frames > 0) {
           std::cout << "resumed:                kept " << summary.kept_existing_frames
-                    << " existing label files (--overwrite rewrites them); the statistics above are of the files\n";
+                    << " existing left label files (--overwrite rewrites them): the statistics above are of the files "
+                       "on disk, the stereo-check counts of the maps this run computed\n";
         }
       }
       std::cout << std::flush;

@@ -41,8 +41,9 @@ std::string LabelRunOptionsToYaml(const LabelRunOptions& options);
 struct LabelRunSummary {
   std::string sequence;
   bool skipped_complete = false;  // all label files existed: odometry not run (resume)
-  // Partial resume: label files that existed before the run and were kept (not rewritten without
-  // labels.overwrite). The statistics describe the files on disk, so these frames are read back.
+  // Partial resume: left label files that existed before the run and were kept (not rewritten
+  // without labels.overwrite). The statistics describe the files on disk, so these frames are read
+  // back; projected/verified_labels still count the maps this run computed.
   int kept_existing_frames = 0;
   // Timing (wall clock, image decoding excluded). One thread: odometry =
   // total - labels (GT evaluation excluded). Worker thread: odometry = the
