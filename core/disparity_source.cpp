@@ -142,6 +142,15 @@ bool AsyncDisparitySource::IsReady(int index) {
 DisparityPair AsyncDisparitySource::Predict(int index, const cv::Mat& left_image) {
   std::unique_lock<std::mutex> lock(mutex_);
   const bool prefetched = index == running_index_ || index == done_index_ || index == requested_index_;
+  // A request for another frame waits until this result is taken: started as soon as frame `index`
+  // finishes, it could finish too before this thread wakes and overwrite the result it waits for.
+  int deferred_index = -1;
+  cv::Mat deferred_image;
+  if (requested_index_ >= 0 && requested_index_ != index) {
+    deferred_index = std::exchange(requested_index_, -1);
+    deferred_image = std::move(requested_image_);
+    requested_image_.release();
+  }
   if (!prefetched) {
     requested_index_ = index;
     requested_image_ = left_image.clone();
@@ -150,8 +159,15 @@ DisparityPair AsyncDisparitySource::Predict(int index, const cv::Mat& left_image
   changed_.wait(lock, [&] { return done_index_ == index; });
   (prefetched ? prefetched_used_ : computed_on_demand_)++;
   done_index_ = -1;
-  if (done_error_) std::rethrow_exception(std::exchange(done_error_, nullptr));
-  return std::move(done_);
+  DisparityPair result = std::move(done_);
+  std::exception_ptr error = std::exchange(done_error_, nullptr);
+  if (deferred_index >= 0 && requested_index_ < 0) {
+    requested_index_ = deferred_index;
+    requested_image_ = std::move(deferred_image);
+    changed_.notify_all();
+  }
+  if (error) std::rethrow_exception(error);
+  return result;
 }
 
 }  // namespace dvso

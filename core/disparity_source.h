@@ -67,8 +67,9 @@ class FileDisparitySource : public DisparitySource {
 
 // Runs another source on a worker thread: Prefetch(i) starts frame i while the
 // caller goes on (e.g. tracks frame i); Predict(i) returns that result, waiting
-// for it, or computes i when it was not prefetched. Holds at most one frame
-// in flight and one result, so memory is bounded. Errors of the wrapped source
+// for it, or computes i when it was not prefetched (a prefetch of another frame
+// queued meanwhile starts once Predict has taken its result). Holds at most one
+// frame in flight and one result, so memory is bounded. Errors of the wrapped source
 // reach the caller of Predict for that frame. All methods are to be called
 // from one thread (the odometry's).
 class AsyncDisparitySource : public DisparitySource {

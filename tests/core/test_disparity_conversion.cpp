@@ -3,6 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <mutex>
+#include <thread>
 #include <cmath>
 #include <filesystem>
 #include <limits>
@@ -220,6 +224,53 @@ TEST(AsyncDisparitySource, ServesPrefetchedFramesComputesOthersAndPassesErrorsBa
   async.Prefetch(7, image);
   EXPECT_THROW(async.Predict(7, image), Error);
   EXPECT_FLOAT_EQ(async.Predict(8, image).left.at<float>(0, 0), 8.0f);  // the worker survives an error
+}
+
+// Frame 1 is being computed and frame 2 is queued when frame 1 is asked for: frame 1's result must
+// reach the caller (the worker must not compute frame 2 over it before the caller wakes) and frame 2
+// is still served from its prefetch afterwards.
+class GatedSource : public DisparitySource {
+ public:
+  DisparityPair Predict(int index, const cv::Mat& image) override {
+    if (index == 1) {
+      std::unique_lock<std::mutex> lock(mutex);
+      started = true;
+      changed.notify_all();
+      changed.wait(lock, [&] { return released; });
+    }
+    ++calls;
+    cv::Mat m(image.rows, image.cols, CV_32F, cv::Scalar(static_cast<float>(index)));
+    return {m, m.clone()};
+  }
+  std::mutex mutex;
+  std::condition_variable changed;
+  bool started = false, released = false;
+  std::atomic<int> calls{0};
+};
+
+TEST(AsyncDisparitySource, QueuedPrefetchDoesNotOverwriteTheResultBeingWaitedFor) {
+  auto inner = std::make_unique<GatedSource>();
+  GatedSource* gated = inner.get();
+  AsyncDisparitySource async(std::move(inner));
+  const cv::Mat image(4, 4, CV_8UC1, cv::Scalar(0));
+  async.Prefetch(1, image);
+  {
+    std::unique_lock<std::mutex> lock(gated->mutex);
+    gated->changed.wait(lock, [&] { return gated->started; });  // frame 1 is running
+  }
+  async.Prefetch(2, image);  // queued behind it
+  std::thread release([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    std::lock_guard<std::mutex> lock(gated->mutex);
+    gated->released = true;
+    gated->changed.notify_all();
+  });
+  EXPECT_FLOAT_EQ(async.Predict(1, image).left.at<float>(0, 0), 1.0f);
+  release.join();
+  EXPECT_FLOAT_EQ(async.Predict(2, image).left.at<float>(0, 0), 2.0f);
+  EXPECT_EQ(async.prefetched_used(), 2);
+  EXPECT_EQ(async.computed_on_demand(), 0);
+  EXPECT_EQ(gated->calls.load(), 2);
 }
 
 }  // namespace
