@@ -149,7 +149,6 @@ DisparityPair AsyncDisparitySource::Predict(int index, const cv::Mat& left_image
   if (requested_index_ >= 0 && requested_index_ != index) {
     deferred_index = std::exchange(requested_index_, -1);
     deferred_image = std::move(requested_image_);
-    requested_image_.release();
   }
   if (!prefetched) {
     requested_index_ = index;

@@ -2,6 +2,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -170,10 +171,14 @@ LabelRunSummary RunLabelExtraction(const std::string& sequence_dir, const std::s
   LabelRunSummary summary;
   summary.sequence = sequence_dir;
   summary.right_labels = options.labels.right_labels;
+  // Label files already there (none count with overwrite): all of them = resume without running; some
+  // = a partial resume, where LabelProducer keeps them (it writes only missing ones).
+  std::vector<bool> kept(end - options.first, false), kept_right(end - options.first, false);
   bool complete = !options.labels.overwrite;
-  for (int i = options.first; complete && i < end; ++i) {
-    complete = fs::exists(LabelProducer::LabelPath(out_dir, i)) &&
-               (!options.labels.right_labels || fs::exists(LabelProducer::LabelPath(out_dir, i, true)));
+  for (int i = options.first; !options.labels.overwrite && i < end; ++i) {
+    kept[i - options.first] = fs::exists(LabelProducer::LabelPath(out_dir, i));
+    kept_right[i - options.first] = options.labels.right_labels && fs::exists(LabelProducer::LabelPath(out_dir, i, true));
+    complete = complete && kept[i - options.first] && (!options.labels.right_labels || kept_right[i - options.first]);
   }
   if (complete) {
     // Resume: every label file is there (written atomically, so complete); only re-read for the summary.
@@ -187,14 +192,8 @@ LabelRunSummary RunLabelExtraction(const std::string& sequence_dir, const std::s
       }
     }
   } else {
-    // A partial resume keeps the files already there (LabelProducer writes only missing ones): the
-    // statistics must then describe those files, not the maps this run computed for them.
-    std::vector<bool> kept(end - options.first, false), kept_right(end - options.first, false);
-    for (int i = options.first; !options.labels.overwrite && i < end; ++i) {
-      kept[i - options.first] = fs::exists(LabelProducer::LabelPath(out_dir, i));
-      kept_right[i - options.first] = options.labels.right_labels && fs::exists(LabelProducer::LabelPath(out_dir, i, true));
-      summary.kept_existing_frames += kept[i - options.first];
-    }
+    // A partial resume: the statistics must describe the kept files, not the maps this run computed for them.
+    summary.kept_existing_frames = static_cast<int>(std::count(kept.begin(), kept.end(), true));
     const auto as_on_disk = [&](int frame_index, const cv::Mat& labels, bool right) {
       const std::vector<bool>& existed = right ? kept_right : kept;
       const int k = frame_index - options.first;
