@@ -72,4 +72,10 @@ bool SameRectifiedCamera(const std::vector<double>& p, const std::vector<double>
   return true;
 }
 
+bool ColourPairMatchesGrey(const std::vector<double>& grey_left, const std::vector<double>* grey_right,
+                           const std::vector<double>& colour_left, const std::vector<double>* colour_right) {
+  if (!SameRectifiedCamera(grey_left, colour_left)) return false;
+  return colour_right == nullptr || (grey_right != nullptr && SameRectifiedCamera(*grey_right, *colour_right));
+}
+
 }  // namespace dvso::internal

@@ -19,5 +19,10 @@ std::vector<std::string> ListImages(const std::string& directory);
 // same camera: equal intrinsics and centre. On KITTI the colour cameras sit ~6 cm beside the grey ones
 // (P2[0][3] != P0[0][3]), so their images are another viewpoint; our simulator renders colour at the grey centres.
 bool SameRectifiedCamera(const std::vector<double>& p, const std::vector<double>& q);
+// The one rule for "the colour pair is the grey pair in colour" (KITTI odometry calib.txt and raw
+// calib_cam_to_cam.txt alike): the left colour camera is the left grey one, and a right colour camera, when
+// there is one to read (nullptr = none), is the right grey one (grey_right nullptr = no right grey camera).
+bool ColourPairMatchesGrey(const std::vector<double>& grey_left, const std::vector<double>* grey_right,
+                           const std::vector<double>& colour_left, const std::vector<double>* colour_right);
 
 }  // namespace dvso::internal

@@ -88,9 +88,9 @@ StereoCamera ReadKittiCalibration(const std::string& calib_path, int width, int 
 
 bool KittiColourMatchesGrey(const std::string& calib_path) {
   std::map<std::string, std::vector<double>> rows = ReadCalibrationRows(calib_path);
-  if (!rows.count("P0") || !rows.count("P2") || !internal::SameRectifiedCamera(rows["P0"], rows["P2"])) return false;
-  // A right colour camera, when given, must be the right grey one too.
-  return !rows.count("P3") || (rows.count("P1") && internal::SameRectifiedCamera(rows["P1"], rows["P3"]));
+  if (!rows.count("P0") || !rows.count("P2")) return false;
+  const auto row = [&](const char* key) { return rows.count(key) ? &rows.at(key) : nullptr; };
+  return internal::ColourPairMatchesGrey(rows["P0"], row("P1"), rows["P2"], row("P3"));
 }
 
 void WriteKittiCalibration(const std::string& calib_path, const StereoCamera& camera) {

@@ -163,13 +163,16 @@ class KittiRawSequence : public SequenceReader {
     // The colour pair beside the grey one (for the network), paired with the grey frames like the right camera,
     // only when it was taken from the grey cameras' centres (CameraPair; the simulator's drives): on KITTI
     // cameras 02/03 sit ~6 cm beside 00/01, another viewpoint than the grey pair's maps and labels.
-    auto projection = [&](int id) {
+    auto projection = [&](int id) -> const std::vector<double>& {
       return CalibrationEntry(calibration.entries, "P_rect_0" + std::to_string(id), 12, cam_to_cam);
     };
     RawCameraFiles colour_left, colour_right;
+    // The right colour camera counts only when a right image is read at all (stereo) and its folder is there.
+    const bool colour_right_read = stereo_ && fs::is_directory(Camera(3));
     color_ = colour_is_left_ ||
-             (fs::is_directory(Camera(2)) && internal::SameRectifiedCamera(projection(0), projection(2)) &&
-              (!stereo_ || !fs::is_directory(Camera(3)) || internal::SameRectifiedCamera(projection(1), projection(3))));
+             (fs::is_directory(Camera(2)) &&
+              internal::ColourPairMatchesGrey(projection(0), stereo_ ? &projection(1) : nullptr, projection(2),
+                                              colour_right_read ? &projection(3) : nullptr));
     if (color_ && !colour_is_left_) {
       colour_left = LoadCamera(2, calibration);
       if (fs::is_directory(Camera(3))) colour_right = LoadCamera(3, calibration);

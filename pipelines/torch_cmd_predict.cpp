@@ -90,6 +90,12 @@ void RunPredict(const PredictArgs& args) {
     if (!args.no_color) {
       cv::imwrite(JoinPath(JoinPath(args.out, "left_color"), name), stacknet::ColorizeDisparity(pair.left));
       cv::imwrite(JoinPath(JoinPath(args.out, "right_color"), name), stacknet::ColorizeDisparity(pair.right));
+    } else {
+      // A preview of this name from an earlier run no longer shows this map: remove it, not leave it beside.
+      for (const char* sub : {"left_color", "right_color"}) {
+        std::error_code ignored;
+        fs::remove(JoinPath(JoinPath(args.out, sub), name), ignored);
+      }
     }
   };
   // Reading frame i + 1 and writing frame i - 1 run on two I/O threads while
@@ -121,6 +127,14 @@ void RunPredict(const PredictArgs& args) {
     progress.Update(i + 1);
   }
   if (writing.valid()) writing.get();
+  if (args.no_color) {
+    // Preview folders left empty by the removals above go too (a folder with other files stays).
+    for (const char* sub : {"left_color", "right_color"}) {
+      const std::string dir = JoinPath(args.out, sub);
+      std::error_code ignored;
+      if (fs::is_directory(dir, ignored) && fs::is_empty(dir, ignored)) fs::remove(dir, ignored);
+    }
+  }
   progress.Finish();
   const double total_s = std::chrono::duration<double>(Clock::now() - start).count();
   std::cout << "Timing: " << count / std::max(total_s, 1e-9) << " frames/s; per frame " << 1000 * forward_s / count

@@ -150,6 +150,18 @@ cv::Mat GroundTruth(const std::string& dir, int frame_index) {
   return ReadKittiMapPng(JoinPath(dir, FrameFileName(frame_index, ".png")));
 }
 
+// A label file already in the output folder, read back for the summary: it must be a map of the
+// sequence's images (a folder left over from another sequence or camera is an error naming the file,
+// found before the odometry runs, not when its frame comes up hours later).
+cv::Mat ReadExistingLabels(const std::string& path, int width, int height) {
+  cv::Mat labels = ReadKittiMapPng(path);
+  RequireFile(labels.cols == width && labels.rows == height, path,
+              "existing label map is " + std::to_string(labels.cols) + "x" + std::to_string(labels.rows) +
+                  ", the sequence's images are " + std::to_string(width) + "x" + std::to_string(height) +
+                  " (left from another run? --overwrite replaces it)");
+  return labels;
+}
+
 double MsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
@@ -180,25 +192,31 @@ LabelRunSummary RunLabelExtraction(const std::string& sequence_dir, const std::s
     kept_right[i - options.first] = options.labels.right_labels && fs::exists(LabelProducer::LabelPath(out_dir, i, true));
     complete = complete && kept[i - options.first] && (!options.labels.right_labels || kept_right[i - options.first]);
   }
+  const int width = sequence->camera().left.width, height = sequence->camera().left.height;
   if (complete) {
     // Resume: every label file is there (written atomically, so complete); only re-read for the summary.
     summary.skipped_complete = true;
     for (int i = options.first; i < end; ++i) {
-      summary.statistics.AddFrame(ReadKittiMapPng(LabelProducer::LabelPath(out_dir, i)),
+      summary.statistics.AddFrame(ReadExistingLabels(LabelProducer::LabelPath(out_dir, i), width, height),
                                   GroundTruth(options.gt_disparity_dir, i));
       if (options.labels.right_labels) {
-        summary.right_statistics.AddFrame(ReadKittiMapPng(LabelProducer::LabelPath(out_dir, i, true)),
-                                          GroundTruth(options.gt_disparity_right_dir, i));
+        summary.right_statistics.AddFrame(
+            ReadExistingLabels(LabelProducer::LabelPath(out_dir, i, true), width, height),
+            GroundTruth(options.gt_disparity_right_dir, i));
       }
     }
   } else {
     // A partial resume: the statistics must describe the kept files, not the maps this run computed for them.
     summary.kept_existing_frames = static_cast<int>(std::count(kept.begin(), kept.end(), true));
+    for (int i = options.first; i < end; ++i) {
+      if (kept[i - options.first]) ReadExistingLabels(LabelProducer::LabelPath(out_dir, i), width, height);
+      if (kept_right[i - options.first]) ReadExistingLabels(LabelProducer::LabelPath(out_dir, i, true), width, height);
+    }
     const auto as_on_disk = [&](int frame_index, const cv::Mat& labels, bool right) {
       const std::vector<bool>& existed = right ? kept_right : kept;
       const int k = frame_index - options.first;
       return k >= 0 && k < static_cast<int>(existed.size()) && existed[k]
-                 ? ReadKittiMapPng(LabelProducer::LabelPath(out_dir, frame_index, right))
+                 ? ReadExistingLabels(LabelProducer::LabelPath(out_dir, frame_index, right), width, height)
                  : labels;
     };
     PairCachingReader reader(*sequence, static_cast<size_t>(options.image_cache_pairs));

@@ -16,6 +16,7 @@
 #include "core/fs_util.h"
 #include "core/lie.h"
 #include "core/sequence.h"
+#include "core/sequence_common.h"
 #include "core/trajectory.h"
 #include "tests/temp_dir.h"
 
@@ -324,6 +325,19 @@ TEST(SequenceReader, KittiCalibrationGivesEachPairItsOwnBaseline) {
   EXPECT_TRUE(KittiColourMatchesGrey(root + "/calib.txt"));
   WriteText(root + "/calib.txt", "P0: 700 0 30 0 0 700 20 0 0 0 1 0\nP1: 700 0 30 -378 0 700 20 0 0 0 1 0\n");
   EXPECT_THROW(ReadKittiCalibration(root + "/calib.txt", 60, 40, CameraPair::kColour), Error);
+}
+
+TEST(SequenceReader, ColourPairMatchesGreyIsOneRuleForBothLayouts) {
+  using internal::ColourPairMatchesGrey;
+  const std::vector<double> grey_left{700, 0, 30, 0, 0, 700, 20, 0, 0, 0, 1, 0};
+  const std::vector<double> grey_right{700, 0, 30, -378, 0, 700, 20, 0, 0, 0, 1, 0};
+  const std::vector<double> beside{700, 0, 30, 42, 0, 700, 20, 0, 0, 0, 1, 0};  // KITTI: 6 cm beside camera 0
+  EXPECT_TRUE(ColourPairMatchesGrey(grey_left, &grey_right, grey_left, &grey_right));
+  EXPECT_TRUE(ColourPairMatchesGrey(grey_left, &grey_right, grey_left, nullptr));  // no right colour camera
+  EXPECT_TRUE(ColourPairMatchesGrey(grey_left, nullptr, grey_left, nullptr));
+  EXPECT_FALSE(ColourPairMatchesGrey(grey_left, &grey_right, beside, &grey_right));  // left is another viewpoint
+  EXPECT_FALSE(ColourPairMatchesGrey(grey_left, &grey_right, grey_left, &beside));   // right is another one
+  EXPECT_FALSE(ColourPairMatchesGrey(grey_left, nullptr, grey_left, &grey_right));   // a right colour, no right grey
 }
 
 TEST(SequenceReader, KittiColourCamerasBesideTheGreyOnesAreAnotherPair) {

@@ -91,6 +91,21 @@ TEST(LabelsEndToEnd, EveryFrameLabelledAndAccurateThenResumes) {
   EXPECT_EQ(cv::countNonZero(ReadKittiMapPng(frame3)), 0) << "an existing file was rewritten";
   EXPECT_EQ(third.statistics.min_labels_per_frame(), 0) << "statistics of computed maps, not of the files";
   EXPECT_GT(third.statistics.mean_labels_per_frame(), 500.0);
+
+  // A kept file of another size (a folder left from another sequence) is an error naming it, raised
+  // before the odometry runs: the missing frame 9 is not recomputed, the odd file is not replaced.
+  fs::remove(JoinPath(out, FrameFileName(9, ".png")));
+  const std::string frame20 = JoinPath(out, FrameFileName(20, ".png"));
+  WriteKittiMapPng(frame20, cv::Mat::zeros(64, 208, CV_32FC1));
+  try {
+    labels::RunLabelExtraction(seq, out, options);
+    ADD_FAILURE() << "a kept label map of the wrong size was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find(frame20), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("208x64"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(fs::exists(JoinPath(out, FrameFileName(9, ".png"))));
+  EXPECT_EQ(ReadKittiMapPng(frame20).cols, 208);
 }
 
 TEST(LabelsEndToEnd, BatchListAndErrors) {

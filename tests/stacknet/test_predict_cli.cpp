@@ -87,6 +87,15 @@ TEST_F(PredictCli, EmptyImageFolderLeavesNoOutputAndNoColorMakesNoPreviewFolders
   EXPECT_TRUE(fs::exists(dir_ / "out" / "right" / "a.png"));
   EXPECT_FALSE(fs::exists(dir_ / "out" / "left_color"));
   EXPECT_FALSE(fs::exists(dir_ / "out" / "right_color"));
+  // With previews, then again without: the stale previews of a.png go, another image's preview stays.
+  WriteImage("b.png", 64, 32);
+  ASSERT_EQ(Predict(), 0);
+  ASSERT_TRUE(fs::exists(dir_ / "out" / "left_color" / "a.png"));
+  fs::remove(dir_ / "images" / "b.png");
+  ASSERT_EQ(Predict("--no-color"), 0);
+  EXPECT_FALSE(fs::exists(dir_ / "out" / "left_color" / "a.png"));
+  EXPECT_FALSE(fs::exists(dir_ / "out" / "right_color" / "a.png"));
+  EXPECT_TRUE(fs::exists(dir_ / "out" / "left_color" / "b.png")) << "not this run's image: left alone";
 }
 
 // On a KITTI raw drive the network sees the colour pair and the maps are named like the drive's frames
