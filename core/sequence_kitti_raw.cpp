@@ -169,13 +169,15 @@ class KittiRawSequence : public SequenceReader {
     RawCameraFiles colour_left, colour_right;
     // The right colour camera counts only when a right image is read at all (stereo) and its folder is there.
     const bool colour_right_read = stereo_ && fs::is_directory(Camera(3));
+    // P_rect_03 is read only once the left colour camera is known to be the grey one: a calibration whose
+    // colour cameras sit elsewhere needs no right colour entry for the grey pair to open.
     color_ = colour_is_left_ ||
-             (fs::is_directory(Camera(2)) &&
+             (fs::is_directory(Camera(2)) && internal::SameRectifiedCamera(projection(0), projection(2)) &&
               internal::ColourPairMatchesGrey(projection(0), stereo_ ? &projection(1) : nullptr, projection(2),
                                               colour_right_read ? &projection(3) : nullptr));
     if (color_ && !colour_is_left_) {
       colour_left = LoadCamera(2, calibration);
-      if (fs::is_directory(Camera(3))) colour_right = LoadCamera(3, calibration);
+      if (colour_right_read) colour_right = LoadCamera(3, calibration);
     }
     int unpaired = 0;
     for (size_t i = 0; i < left.files.size(); ++i) {

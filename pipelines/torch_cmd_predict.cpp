@@ -4,6 +4,7 @@
 // image resolution) plus colour-mapped previews in left_color/ and right_color/.
 // NAME: the input's file name with --images, %06d with --sequence.
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <future>
 #include <filesystem>
@@ -84,6 +85,7 @@ void RunPredict(const PredictArgs& args) {
     }
     return image;
   };
+  std::atomic<bool> removed_previews{false};  // --no-color removed a stale preview (set on the writer thread)
   auto write = [&](const DisparityPair& pair, const std::string& name) {
     WriteKittiMapPng(JoinPath(JoinPath(args.out, "left"), name), pair.left);
     WriteKittiMapPng(JoinPath(JoinPath(args.out, "right"), name), pair.right);
@@ -93,8 +95,10 @@ void RunPredict(const PredictArgs& args) {
     } else {
       // A preview of this name from an earlier run no longer shows this map: remove it, not leave it beside.
       for (const char* sub : {"left_color", "right_color"}) {
-        std::error_code ignored;
-        fs::remove(JoinPath(JoinPath(args.out, sub), name), ignored);
+        const std::string preview = JoinPath(JoinPath(args.out, sub), name);
+        std::error_code error;
+        if (fs::remove(preview, error)) removed_previews = true;
+        RequireFile(!error, preview, "cannot remove the preview of an earlier run: " + error.message());
       }
     }
   };
@@ -127,8 +131,8 @@ void RunPredict(const PredictArgs& args) {
     progress.Update(i + 1);
   }
   if (writing.valid()) writing.get();
-  if (args.no_color) {
-    // Preview folders left empty by the removals above go too (a folder with other files stays).
+  if (removed_previews) {
+    // Preview folders this run emptied go too (a folder with other files stays).
     for (const char* sub : {"left_color", "right_color"}) {
       const std::string dir = JoinPath(args.out, sub);
       std::error_code ignored;

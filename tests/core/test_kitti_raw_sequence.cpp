@@ -181,6 +181,16 @@ TEST_F(SyncDrive, ColourCamerasBesideTheGreyOnesAreNotTheGreyPairsColour) {
   EXPECT_FALSE(colour_pair->Read(3, colour).left_color.empty());
   // The unmoved drive offers its colour beside the grey pair (the simulator renders it from the same centres).
   EXPECT_TRUE(OpenSequence(Drive().string())->has_color());
+  // With the left colour camera elsewhere, P_rect_03 is never needed by the grey pair: a calibration without
+  // it still opens (it is read only when the left colour camera is the grey one).
+  const std::string calib = (copy.parent_path() / "calib_cam_to_cam.txt").string();
+  std::string kept_lines;
+  for (std::ifstream moved_in(calib); std::getline(moved_in, line);) {
+    if (line.rfind("P_rect_03:", 0) != 0) kept_lines += line + "\n";
+  }
+  std::ofstream(calib) << kept_lines;
+  ASSERT_TRUE(fs::is_directory(copy / "image_03"));
+  EXPECT_FALSE(OpenSequence(copy.string())->has_color());
 }
 
 TEST_F(SyncDrive, FrameWithoutItsRightImageIsSkippedNotMispaired) {

@@ -96,6 +96,11 @@ TEST_F(PredictCli, EmptyImageFolderLeavesNoOutputAndNoColorMakesNoPreviewFolders
   EXPECT_FALSE(fs::exists(dir_ / "out" / "left_color" / "a.png"));
   EXPECT_FALSE(fs::exists(dir_ / "out" / "right_color" / "a.png"));
   EXPECT_TRUE(fs::exists(dir_ / "out" / "left_color" / "b.png")) << "not this run's image: left alone";
+  // Once a run has removed every preview, the emptied preview folders go too.
+  WriteImage("b.png", 64, 32);
+  ASSERT_EQ(Predict("--no-color"), 0);
+  EXPECT_FALSE(fs::exists(dir_ / "out" / "left_color"));
+  EXPECT_FALSE(fs::exists(dir_ / "out" / "right_color"));
 }
 
 // On a KITTI raw drive the network sees the colour pair and the maps are named like the drive's frames
