@@ -95,13 +95,15 @@ void DepthEvalOptions::Check() const {
 }
 
 double KittiFocalLengthForWidth(int width) {
-  // P_rect_02[0][0] of the five KITTI raw calibration days.
+  // P_rect_02[0][0] of the five KITTI raw calibration days (2011_09_26, 10_03, 09_28, 09_29, 09_30). Every
+  // rectified camera of a day shares it: KITTI odometry 04-10 (2011_09_30, 1226 x 370) have P0[0][0] = 707.0912.
+  // (708.2046, found in some tables for 1226, is a linear guess from the 1224 entry, not a calibration.)
   switch (width) {
     case 1242: return 721.5377;
     case 1241: return 718.856;
     case 1224: return 707.0493;
     case 1238: return 718.3351;
-    case 1226: return 708.2046;
+    case 1226: return 707.0912;
     default: break;
   }
   throw Error("no KITTI focal length known for image width " + std::to_string(width) +

@@ -23,7 +23,7 @@ struct AblationArgs {
 
 void Run(const AblationArgs& args) {
   const ExperimentSetup setup = OpenExperiment(args.experiment);
-  const double default_bv = setup.predictions.untuned_virtual_baseline;
+  const double default_bv = setup.default_virtual_baseline;
   const std::string& out = args.experiment.out;
   std::ostream& log = args.experiment.json ? std::cerr : std::cout;
   const ExperimentSequence& sequence = setup.sequences.front();

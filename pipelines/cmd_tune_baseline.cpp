@@ -29,7 +29,7 @@ void AddTuneBaselineCommand(CLI::App& app) {
     const ExperimentArgs& experiment = args->experiment;
     Require(args->write_model.empty() || !experiment.predictions.model.empty(), "--write-model needs --model");
     const ExperimentSetup setup = OpenExperiment(experiment);
-    const double default_bv = setup.predictions.untuned_virtual_baseline;
+    const double default_bv = setup.default_virtual_baseline;
     const BaselineSearch search = TuneVirtualBaseline(setup, BaselineGrid(args->values, default_bv), experiment.count,
                                                       experiment.out, !experiment.json);
     const size_t n = setup.sequences.size();

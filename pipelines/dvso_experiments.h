@@ -69,6 +69,9 @@ struct ExperimentSetup {
   std::vector<ExperimentSequence> sequences;  // >= 1; several share one camera (f_x and width), so one b_v fits all
   vo::OdometryOptions options;   // preset + config; dvso.virtual_baseline = the default b_v
   PredictionSource predictions;  // opened for the first sequence
+  // b_v of the rows without tb (and the centre of a default tune grid), the precedence of `dvso odometry`:
+  // --virtual-baseline, else the config file's dvso.virtual_baseline, else the model's untuned one.
+  double default_virtual_baseline = 0;
   const SequenceReader& first() const { return *sequences.front().reader; }
 };
 ExperimentSetup OpenExperiment(const ExperimentArgs& args);

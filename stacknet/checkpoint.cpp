@@ -33,11 +33,11 @@ void SaveCheckpoint(const std::string& path, StackNet& model, torch::optim::Adam
 }
 
 namespace {
-torch::serialize::InputArchive OpenArchive(const std::string& path) {
+torch::serialize::InputArchive OpenArchive(const std::string& path, const torch::Device& device) {
   RequireFile(std::filesystem::exists(path), path, "checkpoint not found");
   torch::serialize::InputArchive archive;
   try {
-    archive.load_from(path, torch::kCPU);
+    archive.load_from(path, device);
   } catch (const c10::Error& e) {
     throw Error(path, std::string("not a readable checkpoint: ") + e.what_without_backtrace());
   }
@@ -46,7 +46,7 @@ torch::serialize::InputArchive OpenArchive(const std::string& path) {
 }  // namespace
 
 CheckpointInfo ReadCheckpointInfo(const std::string& path) {
-  torch::serialize::InputArchive archive = OpenArchive(path);
+  torch::serialize::InputArchive archive = OpenArchive(path, torch::kCPU);
   CheckpointInfo info;
   c10::IValue value;
   try {
@@ -70,8 +70,9 @@ CheckpointInfo ReadCheckpointInfo(const std::string& path) {
   return info;
 }
 
-void LoadCheckpointWeights(const std::string& path, StackNet& model, torch::optim::Adam* optimizer) {
-  torch::serialize::InputArchive archive = OpenArchive(path);
+void LoadCheckpointWeights(const std::string& path, StackNet& model, const torch::Device& device,
+                           torch::optim::Adam* optimizer) {
+  torch::serialize::InputArchive archive = OpenArchive(path, device);
   try {
     torch::serialize::InputArchive model_archive;
     archive.read("model", model_archive);
@@ -92,7 +93,7 @@ StackNet LoadModelFromCheckpoint(const std::string& path, CheckpointInfo* info_o
   const CheckpointInfo info = ReadCheckpointInfo(path);
   const StackNetConfig config = ParseConfig(info.config_yaml, path + " (embedded config)");
   StackNet model(config.network);
-  LoadCheckpointWeights(path, model);
+  LoadCheckpointWeights(path, model, torch::kCPU);
   model->eval();
   if (info_out) *info_out = info;
   return model;

@@ -31,8 +31,12 @@ void SaveCheckpoint(const std::string& path, StackNet& model, torch::optim::Adam
 // Reads config and position only (to build the model before loading weights).
 CheckpointInfo ReadCheckpointInfo(const std::string& path);
 // Loads weights (and the optimiser state when `optimizer` is given and the
-// checkpoint has one for the same stage). Throws dvso::Error naming the file.
-void LoadCheckpointWeights(const std::string& path, StackNet& model, torch::optim::Adam* optimizer = nullptr);
+// checkpoint has one for the same stage) onto `device`, the device the model
+// is on: LibTorch's load swaps in each parameter's data as read and builds the
+// Adam state from the archive, so tensors read onto another device would leave
+// the model and its optimiser off the batches' device. Throws dvso::Error naming the file.
+void LoadCheckpointWeights(const std::string& path, StackNet& model, const torch::Device& device,
+                           torch::optim::Adam* optimizer = nullptr);
 
 // Builds the StackNet of a checkpoint with its weights (CPU, eval use).
 StackNet LoadModelFromCheckpoint(const std::string& path, CheckpointInfo* info = nullptr);

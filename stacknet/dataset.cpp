@@ -82,6 +82,12 @@ cv::Mat SampleSparse(const cv::Mat& dense, double fraction, uint64_t seed) {
   return out;
 }
 
+std::unique_ptr<SequenceReader> OpenTrainingSequence(const std::string& root) {
+  // The network learns from the colour pair of a raw drive (paper 5.1: KITTI raw, cameras 02/03).
+  const CameraPair pair = IsKittiRawDrive(root) ? CameraPair::kColour : CameraPair::kGrey;
+  return OpenSequence(root, "", pair);
+}
+
 StereoDataset::StereoDataset(const DataOptions& options, int network_width, int network_height)
     : options_(options), width_(network_width), height_(network_height) {
   options_.Check();
@@ -126,9 +132,7 @@ int StereoDataset::AddSequence(const std::string& root) {
   Sequence seq;
   seq.root = root;
   RequireFile(fs::is_directory(root), root, "sequence folder not found");
-  // The network learns from the colour pair of a raw drive (paper 5.1: KITTI raw, cameras 02/03).
-  const CameraPair pair = IsKittiRawDrive(root) ? CameraPair::kColour : CameraPair::kGrey;
-  seq.reader = OpenSequence(root, "", pair);
+  seq.reader = OpenTrainingSequence(root);
   RequireFile(seq.reader->is_stereo(), root, "training needs a stereo sequence");
   auto dir_if_exists = [&](const std::string& name) {
     if (name.empty()) return std::string();

@@ -32,6 +32,12 @@ cv::Mat ResizeSparseDisparity(const cv::Mat& sparse, int width, int height);
 // as sparse labels; deterministic for a given seed.
 cv::Mat SampleSparse(const cv::Mat& dense, double fraction, uint64_t seed);
 
+// Opens a training sequence through the camera pair the network learns from:
+// the colour pair 02/03 of a KITTI raw drive (paper 5.1), the grey pair
+// otherwise. Training and the export's training camera (baseline, f_x) both
+// open sequences here, so the model's metadata names the pair it saw.
+std::unique_ptr<SequenceReader> OpenTrainingSequence(const std::string& root);
+
 // Stereo pairs from the core sequence readers (KITTI odometry layout, the
 // simulator, KITTI raw drives through their colour pair 02/03, rectified on read
 // for _extract drives), all frames of `sequences` or the lines of `split_file`.

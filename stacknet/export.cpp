@@ -11,6 +11,7 @@
 #include "core/sequence.h"
 #include "stacknet/checkpoint.h"
 #include "stacknet/config.h"
+#include "stacknet/dataset.h"
 #include "stacknet/warping.h"
 
 namespace dvso::stacknet {
@@ -26,7 +27,7 @@ bool TrainingCameraFromConfig(const std::string& config_yaml, double* baseline, 
   for (const auto& [name, data] : config.datasets) sequences.insert(sequences.end(), data.sequences.begin(), data.sequences.end());
   for (const std::string& path : sequences) {
     try {
-      const std::unique_ptr<SequenceReader> sequence = OpenSequence(path);
+      const std::unique_ptr<SequenceReader> sequence = OpenTrainingSequence(path);
       const StereoCamera& cam = sequence->camera();
       if (!(cam.baseline > 0)) continue;
       *baseline = cam.baseline;

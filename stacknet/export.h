@@ -45,7 +45,8 @@ struct ExportOptions {
 };
 
 // The training camera of a config: the first of its sequences (default data,
-// then named datasets) that can be opened. False when none can.
+// then named datasets) that can be opened, through the pair training reads
+// (OpenTrainingSequence: a raw drive's colour pair). False when none can.
 bool TrainingCameraFromConfig(const std::string& config_yaml, double* baseline, double* fx_over_width);
 
 // torch::jit::load with the one error every command gives for a file that is not

@@ -8,6 +8,7 @@
 #include <iomanip>
 #include <iostream>
 #include <sstream>
+#include <utility>
 
 #include <nlohmann/json.hpp>
 
@@ -73,28 +74,94 @@ std::string FormatTerms(const LossTerms& t, double total) {
   return s.str();
 }
 
-// Keeps the CSV rows up to `global_step` (drops rows of an interrupted tail
-// that a resumed run will redo) and returns an appending stream.
-std::ofstream OpenLossCsv(const std::string& path, int64_t keep_up_to_step, bool resume) {
+// Loss sums of one epoch, for its record in epochs.jsonl.
+struct EpochSums {
+  LossTerms terms;  // the terms summed over the steps (total unused)
+  double total = 0;
+  int steps = 0;
+  void Add(double step_total, const LossTerms& t) {
+    terms.unsupervised += t.unsupervised;
+    terms.supervised += t.supervised;
+    terms.lr += t.lr;
+    terms.smooth += t.smooth;
+    terms.occ += t.occ;
+    total += step_total;
+    ++steps;
+  }
+};
+
+// Keeps the CSV rows up to the checkpoint's global step (drops rows of an
+// interrupted tail that a resumed run will redo) and returns an appending
+// stream. `resumed_epoch` receives the kept rows of the epoch the checkpoint
+// stopped in, so that epoch's record also counts the steps run before the
+// interruption (one on its last batch would otherwise log an epoch of 0 steps).
+std::ofstream OpenLossCsv(const std::string& path, const TrainingPosition& resume_at, bool resume,
+                          EpochSums* resumed_epoch) {
   const std::string header = "stage,stage_name,epoch,batch,global_step,learning_rate,total,unsupervised,supervised,lr,smooth,occ";
+  constexpr size_t kColumns = 12;
   std::vector<std::string> kept;
   if (resume && fs::exists(path)) {
     std::ifstream in(path);
     std::string line;
     std::getline(in, line);  // header
     while (std::getline(in, line)) {
+      std::vector<std::string> cells;
       std::istringstream fields(line);
-      std::string cell;
+      for (std::string cell; std::getline(fields, cell, ',');) cells.push_back(cell);
+      if (cells.size() != kColumns) continue;  // a row cut short by a crash: dropped like the tail
+      int stage = -1, epoch = -1;
       int64_t step = -1;
-      for (int column = 0; column < 5 && std::getline(fields, cell, ','); ++column) {
-        if (column == 4) step = std::stoll(cell);
+      double total = 0;
+      LossTerms terms;
+      try {
+        stage = std::stoi(cells[0]);
+        epoch = std::stoi(cells[2]);
+        step = std::stoll(cells[4]);
+        total = std::stod(cells[6]);
+        terms.unsupervised = std::stod(cells[7]);
+        terms.supervised = std::stod(cells[8]);
+        terms.lr = std::stod(cells[9]);
+        terms.smooth = std::stod(cells[10]);
+        terms.occ = std::stod(cells[11]);
+      } catch (const std::exception&) {
+        continue;  // unreadable (cut short by a crash): dropped like the tail
       }
-      if (step >= 0 && step <= keep_up_to_step) kept.push_back(line);
+      if (step < 0 || step > resume_at.global_step) continue;
+      kept.push_back(line);
+      if (resume_at.batch > 0 && stage == resume_at.stage && epoch == resume_at.epoch) {
+        resumed_epoch->Add(total, terms);
+      }
     }
   }
   std::ofstream out(path, std::ios::trunc);
   RequireFile(out.good(), path, "cannot write the loss log");
   out << header << "\n";
+  for (const auto& line : kept) out << line << "\n";
+  return out;
+}
+
+// Keeps the records of the epochs finished before the checkpoint's position and
+// returns an appending stream: the epoch a resumed run continues, and every
+// later one, are logged again by it (as their CSV rows are dropped), so a
+// resume from an older checkpoint or from mid-epoch leaves one record per epoch.
+std::ofstream OpenEpochLog(const std::string& path, const TrainingPosition& resume_at, bool resume) {
+  std::vector<std::string> kept;
+  if (resume && fs::exists(path)) {
+    std::ifstream in(path);
+    for (std::string line; std::getline(in, line);) {
+      const nlohmann::json record = nlohmann::json::parse(line, nullptr, /*allow_exceptions=*/false);
+      if (record.is_discarded() || !record.is_object()) continue;  // a line cut short by a crash
+      auto integer = [&](const char* key) {
+        const auto it = record.find(key);
+        return it != record.end() && it->is_number_integer() ? it->get<int64_t>() : int64_t{-1};
+      };
+      const int64_t stage = integer("stage"), epoch = integer("epoch"), step = integer("global_step");
+      const bool before = stage < resume_at.stage || (stage == resume_at.stage && epoch < resume_at.epoch);
+      if (stage >= 0 && epoch >= 0 && step >= 0 && step <= resume_at.global_step && before) kept.push_back(line);
+    }
+  }
+  std::ofstream out(path, std::ios::trunc);
+  RequireFile(out.good(), path, "cannot write the epoch log");
   for (const auto& line : kept) out << line << "\n";
   return out;
 }
@@ -141,8 +208,7 @@ TrainResult Trainer::Run(const std::string& resume_checkpoint) {
             resume_checkpoint + ": the network options differ from the config; cannot resume");
     info.position = saved.position;
     info.trained_model = saved.trained_model;
-    LoadCheckpointWeights(resume_checkpoint, model_);
-    model_->to(device_);
+    LoadCheckpointWeights(resume_checkpoint, model_, device_);
     std::cerr << "Resuming from " << resume_checkpoint << " at stage " << info.position.stage << ", epoch "
               << info.position.epoch << ", batch " << info.position.batch << " (step " << info.position.global_step
               << ")\n";
@@ -152,8 +218,9 @@ TrainResult Trainer::Run(const std::string& resume_checkpoint) {
     model_->to(device_);
     std::cerr << "Initialised " << copied << " weight tensors from " << train.init_from << "\n";
   }
-  std::ofstream csv = OpenLossCsv(JoinPath(train.output_dir, "losses.csv"), info.position.global_step, resume);
-  std::ofstream epochs_log(JoinPath(train.output_dir, "epochs.jsonl"), resume ? std::ios::app : std::ios::trunc);
+  EpochSums resumed_epoch;  // the steps of the checkpoint's epoch before it (resume only)
+  std::ofstream csv = OpenLossCsv(JoinPath(train.output_dir, "losses.csv"), info.position, resume, &resumed_epoch);
+  std::ofstream epochs_log = OpenEpochLog(JoinPath(train.output_dir, "epochs.jsonl"), info.position, resume);
 
   for (int stage_index = info.position.stage; stage_index < static_cast<int>(config_.stages.size()); ++stage_index) {
     const StageOptions& stage = config_.stages[stage_index];
@@ -165,7 +232,7 @@ TrainResult Trainer::Run(const std::string& resume_checkpoint) {
                                      .betas({train.adam_beta1, train.adam_beta2})
                                      .eps(train.adam_epsilon));
     const bool mid_stage = resume && (info.position.epoch > 0 || info.position.batch > 0);
-    if (mid_stage) LoadCheckpointWeights(resume_checkpoint, model_, &optimizer);
+    if (mid_stage) LoadCheckpointWeights(resume_checkpoint, model_, device_, &optimizer);
     resume = false;
     for (int epoch = info.position.epoch; epoch < stage.epochs; ++epoch) {
       const double lr = stage.LearningRateAt(epoch);
@@ -174,9 +241,8 @@ TrainResult Trainer::Run(const std::string& resume_checkpoint) {
                         info.position.batch, stage.max_steps_per_epoch);
       ProgressBar progress(stage.name + " epoch " + std::to_string(epoch + 1) + "/" + std::to_string(stage.epochs),
                            loader.num_batches());
-      LossTerms sum;
-      int steps = 0;
-      double total_sum = 0;
+      // The first epoch of a resumed run starts from the sums of its steps before the interruption.
+      EpochSums sums = std::exchange(resumed_epoch, EpochSums{});
       const auto start = std::chrono::steady_clock::now();
       for (int batch_index = info.position.batch; auto batch = loader.Next(); ++batch_index) {
         const LossTerms terms = TrainStep(model_, optimizer, stage, config_.loss, batch->to(device_));
@@ -187,13 +253,7 @@ TrainResult Trainer::Run(const std::string& resume_checkpoint) {
         info.position.batch = batch_index + 1;
         ++info.position.global_step;
         result.last_loss = total;
-        sum.unsupervised += terms.unsupervised;
-        sum.supervised += terms.supervised;
-        sum.lr += terms.lr;
-        sum.smooth += terms.smooth;
-        sum.occ += terms.occ;
-        total_sum += total;
-        ++steps;
+        sums.Add(total, terms);
         csv << stage_index << "," << stage.name << "," << epoch << "," << batch_index << ","
             << info.position.global_step << "," << lr << "," << total << "," << terms.unsupervised << ","
             << terms.supervised << "," << terms.lr << "," << terms.smooth << "," << terms.occ << "\n";
@@ -210,22 +270,26 @@ TrainResult Trainer::Run(const std::string& resume_checkpoint) {
       }
       csv.flush();
       const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-      const double n = std::max(1, steps);
+      const double n = std::max(1, sums.steps);
+      const LossTerms& sum = sums.terms;
       if (train.progress) {
         LossTerms mean = sum;
         mean.unsupervised /= n, mean.supervised /= n, mean.lr /= n, mean.smooth /= n, mean.occ /= n;
-        progress.Finish(FormatTerms(mean, total_sum / n));
+        progress.Finish(FormatTerms(mean, sums.total / n));
       }
-      nlohmann::json record = {{"stage", stage_index},         {"stage_name", stage.name},
-                               {"epoch", epoch},               {"steps", steps},
-                               {"global_step", info.position.global_step},
-                               {"learning_rate", lr},          {"mean_total", total_sum / n},
-                               {"mean_unsupervised", sum.unsupervised / n},
-                               {"mean_supervised", sum.supervised / n},
-                               {"mean_lr", sum.lr / n},        {"mean_smooth", sum.smooth / n},
-                               {"mean_occ", sum.occ / n},      {"seconds", seconds}};
-      epochs_log << record.dump() << "\n";
-      epochs_log.flush();
+      // An epoch without steps has no losses to record (its means would read as 0).
+      if (sums.steps > 0) {
+        nlohmann::json record = {{"stage", stage_index},         {"stage_name", stage.name},
+                                 {"epoch", epoch},               {"steps", sums.steps},
+                                 {"global_step", info.position.global_step},
+                                 {"learning_rate", lr},          {"mean_total", sums.total / n},
+                                 {"mean_unsupervised", sum.unsupervised / n},
+                                 {"mean_supervised", sum.supervised / n},
+                                 {"mean_lr", sum.lr / n},        {"mean_smooth", sum.smooth / n},
+                                 {"mean_occ", sum.occ / n},      {"seconds", seconds}};
+        epochs_log << record.dump() << "\n";
+        epochs_log.flush();
+      }
       // Next position: the following epoch of this stage (or the next stage).
       info.position.batch = 0;
       info.position.epoch = epoch + 1;

@@ -134,6 +134,10 @@ TEST(EvalDepth, OptionsCheck) {
 TEST(EvalDepth, KittiFocalByWidth) {
   EXPECT_DOUBLE_EQ(KittiFocalLengthForWidth(1242), 721.5377);
   EXPECT_DOUBLE_EQ(KittiFocalLengthForWidth(1224), 707.0493);
+  // 2011_09_30 (KITTI odometry 04-10, 1226 x 370): P0[0][0] of their calib.txt.
+  EXPECT_DOUBLE_EQ(KittiFocalLengthForWidth(1226), 707.0912);
+  EXPECT_DOUBLE_EQ(KittiFocalLengthForWidth(1238), 718.3351);
+  EXPECT_DOUBLE_EQ(KittiFocalLengthForWidth(1241), 718.856);
   EXPECT_THROW(KittiFocalLengthForWidth(640), Error);
   DepthEvalOptions o;
   o.kitti_focal_by_width = true;

@@ -3,14 +3,19 @@
 #include <gtest/gtest.h>
 #include <torch/script.h>
 
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
+#include <vector>
 
 #include "core/error.h"
+#include "core/sequence.h"
 #include "stacknet/predictor.h"
 
 #include "stacknet/checkpoint.h"
 #include "stacknet/config.h"
+#include "stacknet/dataset.h"
 #include "stacknet/export.h"
 #include "stacknet_test_util.h"
 #include "tests/temp_dir.h"
@@ -130,6 +135,53 @@ TEST(Export, CheckpointExportUsesTheTrainedNetwork) {
   stamped.baseline = 0.3;
   WriteModelWithMetadata((dir / "m.pt").string(), (dir / "s.pt").string(), stamped);
   EXPECT_DOUBLE_EQ(ReadModelMetadata((dir / "s.pt").string()).baseline, 0.3);
+  fs::remove_all(dir);
+}
+
+// Training reads a KITTI raw drive through its colour pair 02/03, so the exported model's training
+// camera is that pair's, not the grey pair's, also where the two baselines differ.
+TEST(Export, TrainingCameraOfARawDriveIsItsColourPair) {
+  const fs::path dir = fs::path(dvso::testing::ScratchPath("export_raw_camera"));
+  const std::string sim = std::string(DVSO_BINARY) + " simulate --quiet --out " + (dir / "seq").string() +
+                          " --count 4 --width 128 --height 64 --color --raw-layout sync > /dev/null 2>&1";
+  ASSERT_EQ(std::system(sim.c_str()), 0) << sim;
+  const fs::path date = dir / "seq" / "kitti_raw" / "2011_09_26";
+  const std::string drive = (date / "2011_09_26_drive_0001_sync").string();
+  // The right colour camera 10 cm further right than the grey one: the two pairs' baselines differ.
+  std::string lines, line;
+  int moved = 0;
+  for (std::ifstream in(date / "calib_cam_to_cam.txt"); std::getline(in, line);) {
+    if (line.rfind("P_rect_03:", 0) == 0) {
+      std::istringstream values(line.substr(10));
+      std::vector<double> p(12);
+      for (double& v : p) values >> v;
+      p[3] -= p[0] * 0.1;
+      line = "P_rect_03:";
+      for (double v : p) line += " " + std::to_string(v);
+      ++moved;
+    }
+    lines += line + "\n";
+  }
+  ASSERT_EQ(moved, 1);
+  std::ofstream(date / "calib_cam_to_cam.txt") << lines;
+  const StereoCamera grey = OpenSequence(drive)->camera();
+  const StereoCamera colour = OpenSequence(drive, "", CameraPair::kColour)->camera();
+  ASSERT_NEAR(colour.baseline - grey.baseline, 0.1, 1e-4);
+  EXPECT_DOUBLE_EQ(OpenTrainingSequence(drive)->camera().baseline, colour.baseline);
+
+  torch::manual_seed(6);
+  StackNetConfig config;
+  config.network = testing::TinyNetwork();
+  config.data.sequences = {drive};
+  config.stages.resize(1);
+  StackNet net(config.network);
+  CheckpointInfo info;
+  info.config_yaml = ConfigToYaml(config);
+  SaveCheckpoint((dir / "c.pt").string(), net, nullptr, info);
+  ExportCheckpoint((dir / "c.pt").string(), (dir / "m.pt").string());
+  const ModelMetadata metadata = ReadModelMetadata((dir / "m.pt").string());
+  EXPECT_DOUBLE_EQ(metadata.baseline, colour.baseline);
+  EXPECT_DOUBLE_EQ(metadata.fx_over_width, colour.left.fx / colour.left.width);
   fs::remove_all(dir);
 }
 

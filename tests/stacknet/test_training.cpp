@@ -3,9 +3,12 @@
 // config strictness and the learning-rate schedule.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
+#include <vector>
 
 #include "core/error.h"
 #include "stacknet/config.h"
@@ -382,6 +385,55 @@ TEST_F(SimulatedTraining, ResumeAfterAnInterruptionContinuesExactly) {
   for (size_t i = 0; i < a.size(); ++i) {
     EXPECT_TRUE(torch::equal(a[i].value(), b[i].value())) << a[i].key() << " differs after resume";
   }
+}
+
+// epochs.jsonl after resumes: an interruption on an epoch's last batch, and a resume from an older
+// checkpoint, leave one record per epoch with the steps and mean loss of an uninterrupted run.
+TEST_F(SimulatedTraining, EpochLogAfterResumesHasOneRecordPerEpoch) {
+  at::set_num_threads(1);
+  StackNetConfig config = TinyConfig(TempDir("epochs_full"));
+  config.stages[0].max_steps_per_epoch = 3;
+  config.stages[0].epochs = 2;
+  config.train.num_threads = 1;
+  Trainer full(config);
+  ASSERT_TRUE(full.Run().finished);
+  auto read_log = [](const std::string& dir) {
+    std::vector<nlohmann::json> records;
+    std::ifstream in(dir + "/epochs.jsonl");
+    for (std::string line; std::getline(in, line);) records.push_back(nlohmann::json::parse(line));
+    return records;
+  };
+  const std::vector<nlohmann::json> expected = read_log(config.train.output_dir);
+  ASSERT_EQ(expected.size(), 3u);  // stage 0: 2 epochs, stage 1: 1
+  auto expect_like_full_run = [&](const std::string& dir, const std::string& when) {
+    const std::vector<nlohmann::json> records = read_log(dir);
+    ASSERT_EQ(records.size(), expected.size()) << when;
+    for (size_t i = 0; i < records.size(); ++i) {
+      EXPECT_GT(records[i]["steps"].get<int>(), 0) << when << ": record " << i;
+      for (const char* key : {"stage", "epoch", "steps", "global_step"}) {
+        EXPECT_EQ(records[i][key].get<int64_t>(), expected[i][key].get<int64_t>()) << when << ": record " << i << " " << key;
+      }
+      // The steps before an interruption come back from losses.csv (6 significant digits).
+      const double mean = expected[i]["mean_total"].get<double>();
+      EXPECT_NEAR(records[i]["mean_total"].get<double>(), mean, 1e-4 * std::abs(mean)) << when << ": record " << i;
+    }
+  };
+
+  config.train.output_dir = TempDir("epochs_resumed");
+  // Step 3 is the last batch of stage 0's first epoch: the resumed run has no step left in it.
+  Trainer interrupted(config, [](const TrainingPosition& p) { return p.global_step == 3; });
+  const TrainResult stop = interrupted.Run();
+  ASSERT_TRUE(stop.interrupted);
+  ASSERT_EQ(stop.position.epoch, 0);
+  ASSERT_EQ(stop.position.batch, 3);
+  Trainer resumed(config);
+  ASSERT_TRUE(resumed.Run(stop.last_checkpoint).finished);
+  expect_like_full_run(config.train.output_dir, "resumed on an epoch's last batch");
+
+  // The finished run resumed from its stage-0 checkpoint redoes stage 1 and logs it once.
+  Trainer again(config);
+  ASSERT_TRUE(again.Run(again.StageCheckpointPath(0)).finished);
+  expect_like_full_run(config.train.output_dir, "resumed from an older checkpoint");
 }
 
 }  // namespace

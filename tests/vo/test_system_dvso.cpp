@@ -368,6 +368,17 @@ TEST(DvsoCli, AblationAndTuneBaselinePrintEveryRow) {
                                                 /*merge_stderr=*/false);
   ASSERT_EQ(from_flag.exit_code, 0) << from_flag.out;
   EXPECT_EQ(nlohmann::json::parse(from_flag.out)["prediction_timing"], "speculative");
+  // A config file's b_v is the rows' default as in `dvso odometry`; --virtual-baseline still wins over it.
+  std::ofstream(dir + "/bv.yaml") << "dvso:\n  virtual_baseline: 0.5\n";
+  const std::string short_ablation = "ablation --json --tuned-baseline 0.55 --count 8 --config " + dir + "/bv.yaml";
+  const auto bv_config = dvso::testing::RunDvso(short_ablation + " --out " + dir + "/abl_bv" + common,
+                                                /*merge_stderr=*/false);
+  ASSERT_EQ(bv_config.exit_code, 0) << bv_config.out;
+  EXPECT_DOUBLE_EQ(nlohmann::json::parse(bv_config.out)["virtual_baseline_default"].get<double>(), 0.5);
+  const auto bv_flag = dvso::testing::RunDvso(short_ablation + " --virtual-baseline 0.45 --out " + dir + "/abl_bvf" +
+                                              common, /*merge_stderr=*/false);
+  ASSERT_EQ(bv_flag.exit_code, 0) << bv_flag.out;
+  EXPECT_DOUBLE_EQ(nlohmann::json::parse(bv_flag.out)["virtual_baseline_default"].get<double>(), 0.45);
 
   // Several sequences (the paper tunes b_v on its training set): every value runs on each, the lowest mean
   // error wins. The same sequence twice, the second cut shorter, so the two runs differ.

@@ -54,6 +54,14 @@ TEST(SystemOptions, StrictKeysAndCheckedValues) {
   EXPECT_THROW(OdometryOptionsFromYamlString("active_pionts: 100\n"), Error);
   EXPECT_THROW(OdometryOptionsFromYamlString("tracker:\n  hubr: 3\n"), Error);
   EXPECT_THROW(OdometryOptionsFromYamlString("active_points: -5\n"), Error);
+  // The window's b_v always comes from dvso.virtual_baseline: naming it is an error that says so.
+  try {
+    OdometryOptionsFromYamlString("window:\n  virtual_stereo_baseline: 0.3\n");
+    ADD_FAILURE() << "window.virtual_stereo_baseline accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("dvso.virtual_baseline"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(OdometryOptionsToYaml(OdometryOptions()).find("virtual_stereo_baseline"), std::string::npos);
   EXPECT_THROW(OdometryOptionsFromYamlString("window:\n  max_keyframes: 1\n"), Error);
   try {
     OdometryOptionsFromYamlString("selector:\n  desired_pts: 3\n");

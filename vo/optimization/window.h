@@ -47,7 +47,7 @@ struct WindowOptions {
   double static_stereo_weight = 1.0;    // weight mu of the static stereo term (Stereo DSO couples with 1)
   bool use_virtual_stereo = true;       // add eq. 5.8 residuals when a keyframe has a D^R map
   double virtual_stereo_weight = 1.0;   // lambda of the total energy (paper: coupling factor)
-  double virtual_stereo_baseline = 0.54;  // |t_b| in metres, baseline StackNet was trained with (KITTI ~0.54)
+  double virtual_stereo_baseline = 0.54;  // |t_b| = b_v in metres; vo::System sets it from dvso.virtual_baseline
   double first_pose_prior = 1e8;        // weight of the prior pinning the first keyframe's pose (gauge), per twist component
   double affine_a_prior = 1e4;          // weight pulling every keyframe's a towards 0 (brightness gauge; DSO affineOptModeA)
   double affine_b_prior = 1e2;          // weight pulling every keyframe's b towards 0 (DSO affineOptModeB)

@@ -94,7 +94,6 @@ void VisitFields(Options& o, Visitor&& v) {
   v("window", "static_stereo_weight", o.window.static_stereo_weight);
   v("window", "use_virtual_stereo", o.window.use_virtual_stereo);
   v("window", "virtual_stereo_weight", o.window.virtual_stereo_weight);
-  v("window", "virtual_stereo_baseline", o.window.virtual_stereo_baseline);
   v("window", "first_pose_prior", o.window.first_pose_prior);
   v("window", "affine_a_prior", o.window.affine_a_prior);
   v("window", "affine_b_prior", o.window.affine_b_prior);
@@ -127,6 +126,13 @@ OdometryOptions FromSection(YamlSection& root, const OdometryOptions& base) {
     }
     s->Read(key, &field);
   });
+  // window.virtual_stereo_baseline was listed here once but System always sets it from dvso.virtual_baseline
+  // (one b_v for the depth initialisation and eq. 5.8): an old config that names it gets told where b_v lives.
+  if (const auto window = children.find("window");
+      window != children.end() && window->second->Has("virtual_stereo_baseline")) {
+    throw Error(root.origin(), "window.virtual_stereo_baseline is not a setting: the virtual baseline b_v is "
+                               "dvso.virtual_baseline (0 = the model's); delete the line");
+  }
   root.RequireAllKeysUsed();
   try {
     o.Check();

@@ -322,6 +322,8 @@ void System::ResetAfterLoss(int frame_index, const Eigen::Isometry3d& predicted)
   T_last_ref_ = velocity_ = Eigen::Isometry3d::Identity();
   last_a_ = last_b_ = first_rmse_ = last_rmse_ = 0;
   frames_since_keyframe_ = 0;
+  virtual_stereo_residuals_ = 0;  // they described the window just dropped
+  virtual_stereo_energy_ = 0;
   last_T_world_camera_ = predicted;
   segment_origin_ = predicted;
 }

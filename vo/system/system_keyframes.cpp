@@ -201,7 +201,10 @@ void System::ActivateCandidates(int new_keyframe_id, bool include_new_keyframe) 
 }
 
 void System::RunOptimization(FrameEvent* event) {
-  if (!options_.bundle_adjustment || options_.optimization_iterations == 0 || window_->num_points() == 0) return;
+  if (!options_.bundle_adjustment || options_.optimization_iterations == 0 || window_->num_points() == 0) {
+    UpdateVirtualStereoStatistics();  // run_log.csv describes this window even when it is not optimised
+    return;
+  }
   const auto start = std::chrono::steady_clock::now();
   window_->Optimize(options_.optimization_iterations);
   // Points the new keyframe no longer sees leave the window (DSO), so that
