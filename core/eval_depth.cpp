@@ -7,6 +7,7 @@
 #include <functional>
 #include <iomanip>
 #include <limits>
+#include <map>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <optional>
@@ -17,6 +18,7 @@
 #include "core/disparity_io.h"
 #include "core/error.h"
 #include "core/fs_util.h"
+#include "core/kitti_raw_calibration.h"
 
 namespace dvso {
 
@@ -79,9 +81,10 @@ void DepthEvalOptions::Check() const {
   Require(std::isfinite(min_depth) && min_depth > 0.0, "eval-depth: min_depth must be > 0");
   Require(std::isfinite(max_depth) && max_depth > min_depth, "eval-depth: max_depth must be > min_depth");
   Require(std::isfinite(fxb) && fxb >= 0.0, "eval-depth: fxb must be >= 0");
-  Require(!(kitti_focal_by_width && fxb > 0.0), "eval-depth: give either fxb or kitti_focal_by_width, not both");
+  Require((kitti_focal_by_width ? 1 : 0) + (fxb > 0.0 ? 1 : 0) + (raw_root.empty() ? 0 : 1) <= 1,
+          "eval-depth: give only one of fxb, kitti_focal_by_width and raw_root");
   if (pred_kind == MapKind::kDisparity || gt_kind == MapKind::kDisparity) {
-    Require(fxb > 0.0 || kitti_focal_by_width,
+    Require(fxb > 0.0 || kitti_focal_by_width || !raw_root.empty(),
             "eval-depth: disparity maps need focal length * baseline (--fxb, --calib or --kitti-focal) "
             "to become depths");
   }
@@ -272,10 +275,12 @@ std::string JoinFirst(const std::vector<std::string>& names, size_t max_count) {
 namespace {
 
 // Evaluates GT maps gt_dir/names[i] against prediction(i, gt_map) (CV_32F at the GT size, in the
-// unit of options.pred_kind); `label(i)` names the prediction in errors.
+// unit of options.pred_kind); `label(i)` names the prediction in errors. fxb_per_map (when not empty,
+// one per name) replaces options' fx * baseline.
 DepthEvalResult EvaluateNamedMaps(const std::vector<std::string>& names, const std::string& gt_dir,
                                   const std::function<cv::Mat(size_t, const cv::Mat&)>& prediction,
-                                  const std::function<std::string(size_t)>& label, const DepthEvalOptions& options) {
+                                  const std::function<std::string(size_t)>& label, const DepthEvalOptions& options,
+                                  const std::vector<double>& fxb_per_map = {}) {
   DepthEvalResult result;
   std::optional<DepthRangeAccumulator> ranges;
   if (!options.range_edges.empty()) ranges.emplace(options.range_edges);
@@ -283,8 +288,8 @@ DepthEvalResult EvaluateNamedMaps(const std::vector<std::string>& names, const s
     const std::string& name = names[i];
     const std::string gt_path = JoinPath(gt_dir, name);
     const cv::Mat gt_map = ReadKittiMapPng(gt_path);
-    double fxb = options.fxb;
-    if (options.kitti_focal_by_width) {
+    double fxb = fxb_per_map.empty() ? options.fxb : fxb_per_map[i];
+    if (fxb_per_map.empty() && options.kitti_focal_by_width) {
       try {
         fxb = KittiFocalLengthForWidth(gt_map.cols) * kKittiStereoBaseline;
       } catch (const Error& e) {
@@ -341,6 +346,7 @@ DepthEvalResult EvaluateNamedMaps(const std::vector<std::string>& names, const s
 DepthEvalResult EvaluateDepthFolders(const std::string& pred_dir, const std::string& gt_dir,
                                      const DepthEvalOptions& options) {
   options.Check();
+  Require(options.raw_root.empty(), "eval-depth: a KITTI raw root gives fx * baseline per split line: it needs --split");
   const std::vector<std::string> gt_names = ListPngNames(gt_dir);
   const std::vector<std::string> pred_names = ListPngNames(pred_dir);
   std::vector<std::string> only_gt, only_pred;
@@ -362,6 +368,17 @@ DepthEvalResult EvaluateDepthFolders(const std::string& pred_dir, const std::str
       [&](size_t i) { return JoinPath(pred_dir, gt_names[i]); }, options);
 }
 
+double SplitLineFxB(const RawCameraCalibration& calibration, int camera) {
+  Require(camera == 2 || camera == 3, "split lines evaluate camera 2 or 3, not " + std::to_string(camera));
+  const auto centre_x = [&](int c) {
+    const Eigen::Matrix<double, 3, 4> p = calibration.Projection(c);
+    return -p(0, 3) / p(0, 0);
+  };
+  const double baseline = centre_x(3) - centre_x(2);
+  RequireFile(baseline > 0, calibration.path, "P_rect_02 / P_rect_03 give a non-positive colour baseline");
+  return calibration.Projection(camera)(0, 0) * baseline;
+}
+
 DepthEvalResult EvaluateDepthSplit(const std::string& split_path, const std::string& pred,
                                    const std::string& gt_dir, const DepthEvalOptions& options) {
   options.Check();
@@ -373,6 +390,16 @@ DepthEvalResult EvaluateDepthSplit(const std::string& split_path, const std::str
     RequireFile(fs::exists(JoinPath(gt_dir, names.back())), JoinPath(gt_dir, names.back()),
                 "no GT map for split line " + std::to_string(i + 1) + " (write them with `dvso gt-depth --split`)");
   }
+  std::vector<double> fxb_per_line;  // empty: options' fx * baseline
+  if (!options.raw_root.empty()) {
+    std::map<std::string, RawCameraCalibration> calibrations;  // one per calibration folder (raw day)
+    for (const SplitEntry& entry : entries) {
+      const std::string dir = FindRawCalibrationDir(JoinPath(options.raw_root, entry.drive));
+      auto it = calibrations.find(dir);
+      if (it == calibrations.end()) it = calibrations.emplace(dir, RawCameraCalibration(dir)).first;
+      fxb_per_line.push_back(SplitLineFxB(it->second, entry.Camera()));
+    }
+  }
   if (fs::path(pred).extension() == ".npy") {
     RequireFile(options.pred_kind == MapKind::kDisparity, pred, "an .npy stack holds disparities / width");
     const NpyDisparityStack stack(pred);
@@ -380,7 +407,7 @@ DepthEvalResult EvaluateDepthSplit(const std::string& split_path, const std::str
                 std::to_string(stack.size()) + " maps for " + std::to_string(entries.size()) + " split entries");
     return EvaluateNamedMaps(
         names, gt_dir, [&](size_t i, const cv::Mat& gt) { return stack.Frame(static_cast<int>(i), gt.cols, gt.rows); },
-        [&](size_t i) { return pred + " [" + std::to_string(i) + "]"; }, options);
+        [&](size_t i) { return pred + " [" + std::to_string(i) + "]"; }, options, fxb_per_line);
   }
   for (const std::string& name : names) {
     RequireFile(fs::exists(JoinPath(pred, name)), JoinPath(pred, name), "no prediction for this split entry");
@@ -390,7 +417,7 @@ DepthEvalResult EvaluateDepthSplit(const std::string& split_path, const std::str
       [&](size_t i, const cv::Mat& gt) {
         return ResizePrediction(ReadKittiMapPng(JoinPath(pred, names[i])), options.pred_kind, gt.size());
       },
-      [&](size_t i) { return JoinPath(pred, names[i]); }, options);
+      [&](size_t i) { return JoinPath(pred, names[i]); }, options, fxb_per_line);
 }
 
 namespace {
@@ -422,6 +449,7 @@ nlohmann::json DepthEvalResultToJson(const DepthEvalResult& result, const DepthE
   j["gt_kind"] = MapKindName(options.gt_kind);
   if (options.fxb > 0.0) j["fxb"] = options.fxb;
   if (options.kitti_focal_by_width) j["fxb"] = "KITTI focal length by width x 0.54 m";
+  if (!options.raw_root.empty()) j["fxb"] = "per split line: P_rect_0X[0][0] x (b3 - b2) of its drive's calibration";
   nlohmann::json per_image = nlohmann::json::array();
   for (size_t i = 0; i < result.names.size(); ++i) {
     nlohmann::json entry = MetricsToJson(result.per_image[i], options.median_scaling);

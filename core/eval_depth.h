@@ -28,6 +28,9 @@ struct DepthEvalOptions {
   MapKind gt_kind = MapKind::kDisparity;    // ground truth: disparity (px, KITTI disp_occ) or depth (m)
   double fxb = 0.0;            // focal length (px, at GT resolution) * baseline (m); needed for disparities
   bool kitti_focal_by_width = false;  // instead of fxb: KITTI focal length from the GT width, baseline 0.54 m
+  // Split evaluation only, instead of fxb: each split line's fx * baseline from its drive's calibration under
+  // this KITTI raw root (SplitLineFxB; monodepth's Eigen-split conversion).
+  std::string raw_root;
   DepthCrop crop = DepthCrop::kNone;  // evaluation crop of Eigen et al. or Garg et al. (fractions of GT size)
   double min_depth = 1e-3;     // GT kept when > min_depth; predictions clamped up to it (m)
   double max_depth = 80.0;     // GT kept when < max_depth; predictions clamped down to it (m)
@@ -106,6 +109,13 @@ struct DepthEvalResult {
 // is empty, the names differ, or no image has a valid GT pixel.
 DepthEvalResult EvaluateDepthFolders(const std::string& pred_dir, const std::string& gt_dir,
                                      const DepthEvalOptions& options);
+
+// fx * baseline (px m) that turns camera `camera`'s (2 or 3) disparities into depth on the KITTI raw day of
+// `calibration`, as monodepth's Eigen-split evaluation does (get_focal_length_baseline): fx = P_rect_0X[0][0],
+// baseline = b3 - b2 of the colour pair with b_X = -P_rect_0X[0][3] / P_rect_0X[0][0] (2011_09_26:
+// 721.5377 px x 0.5327 m, not the 0.54 m of the KITTI 2015 width table).
+struct RawCameraCalibration;
+double SplitLineFxB(const RawCameraCalibration& calibration, int camera);
 
 // The paper's Eigen-split protocol on a split file (core/depth_split.h): GT maps gt_dir/%06d.png in
 // split order (`dvso gt-depth --split`), predictions `pred` either a folder of %06d.png maps or an

@@ -21,12 +21,17 @@ struct EvalDepthArgs {
 
 void Run(EvalDepthArgs& args, const CLI::App& cmd) {
   if (!args.split_path.empty()) {
-    // The paper's protocol (section 5.1, Table 1): Velodyne depth GT, Garg crop, 1e-3 .. 80 m, KITTI fx from
-    // the GT width times 0.54 m; each stays overridable.
+    // The paper's protocol (section 5.1, Table 1): Velodyne depth GT, Garg crop, 1e-3 .. 80 m; disparities
+    // become depths with each line's own calibration under --raw-root (as monodepth's Eigen evaluation),
+    // else with KITTI fx from the GT width times 0.54 m (~1.4 % farther on 2011_09_26); each stays overridable.
     if (cmd.count("--gt-kind") == 0) args.gt_kind = "depth";
     if (cmd.count("--crop") == 0) args.crop = "garg";
-    if (cmd.count("--fxb") == 0 && cmd.count("--calib") == 0) args.options.kitti_focal_by_width = true;
+    if (cmd.count("--fxb") == 0 && cmd.count("--calib") == 0 && args.options.raw_root.empty()) {
+      args.options.kitti_focal_by_width = true;
+    }
   }
+  Require(args.options.raw_root.empty() || !args.split_path.empty(),
+          "--raw-root gives fx * baseline per split line: it needs --split");
   args.options.pred_kind = ParseMapKind(args.pred_kind);
   args.options.gt_kind = ParseMapKind(args.gt_kind);
   args.options.crop = ParseDepthCrop(args.crop);
@@ -43,6 +48,9 @@ void Run(EvalDepthArgs& args, const CLI::App& cmd) {
               << "ground truth : " << args.gt_dir << " (" << MapKindName(args.options.gt_kind) << ")\n";
     if (args.options.fxb > 0.0) std::cout << "fx * baseline: " << args.options.fxb << " px m\n";
     if (args.options.kitti_focal_by_width) std::cout << "fx * baseline: KITTI fx by image width x 0.54 m\n";
+    if (!args.options.raw_root.empty())
+      std::cout << "fx * baseline: per split line, from its drive's calib_cam_to_cam.txt under " << args.options.raw_root
+                << "\n";
     std::cout << "\n";
   }
   const DepthEvalResult result = args.split_path.empty()
@@ -86,6 +94,10 @@ void AddEvalDepthCommand(CLI::App& app) {
   cmd->add_option("--split", args->split_path,
                   "split file ('<drive> <frame> <side>' lines): GT and predictions are %06d.png in split order "
                   "(gt-depth --split); defaults become the paper's protocol: --gt-kind depth --crop garg --kitti-focal");
+  cmd->add_option("--raw-root", args->options.raw_root,
+                  "with --split: KITTI raw root; each line's disparities become depths with its drive's calibration "
+                  "(fx of camera 02/03 x colour baseline b3 - b2, monodepth's Eigen-split conversion)")
+      ->excludes(fxb);
   cmd->add_option("--ranges", args->options.range_edges,
                   "also break the errors down by GT depth range, pixels pooled over images, with the signed "
                   "median pred/GT depth per range: increasing edges in m, e.g. 0,5,10,20,40,80")

@@ -4,10 +4,12 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <opencv2/imgcodecs.hpp>
 
 #include "core/error.h"
 #include "core/eval_depth.h"
+#include "core/kitti_raw_calibration.h"
 #include "tests/temp_dir.h"
 
 namespace fs = std::filesystem;
@@ -129,6 +131,22 @@ TEST(EvalDepth, OptionsCheck) {
   EXPECT_THROW(ParseDepthCrop("square"), Error);
   EXPECT_THROW(ParseMapKind("normals"), Error);
   EXPECT_EQ(ParseDepthCrop("Garg"), DepthCrop::kGarg);
+}
+
+TEST(EvalDepth, SplitLineFxBIsTheCameraFocalTimesTheColourBaseline) {
+  // A raw day with KITTI's layout: colour camera 02 6 cm left of camera 00, 03 0.47 m right of it
+  // (P_rect_0X = K [I | t], t_x = -fx * x_centre), and fx 700 px.
+  const std::string dir = dvso::testing::ScratchPath("split_fxb");
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir + "/calib_cam_to_cam.txt")
+      << "P_rect_00: 700 0 30 0 0 700 20 0 0 0 1 0\n"
+      << "P_rect_01: 700 0 30 -378 0 700 20 0 0 0 1 0\n"
+      << "P_rect_02: 700 0 30 42 0 700 20 0 0 0 1 0\n"
+      << "P_rect_03: 700 0 30 -329 0 700 20 0 0 0 1 0\n";
+  const RawCameraCalibration calibration(dir);
+  EXPECT_NEAR(SplitLineFxB(calibration, 2), 700.0 * (0.47 + 0.06), 1e-9);  // not the grey pair's 0.54 m
+  EXPECT_NEAR(SplitLineFxB(calibration, 3), 700.0 * 0.53, 1e-9);
+  EXPECT_THROW(SplitLineFxB(calibration, 0), Error);
 }
 
 TEST(EvalDepth, KittiFocalByWidth) {

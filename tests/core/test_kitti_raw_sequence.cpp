@@ -280,6 +280,22 @@ TEST_F(SyncDrive, SplitGtAndEvaluationFollowTheSplitOrder) {
     EXPECT_GT(result["per_image"][1]["a1"].get<double>(), 0.999) << source;
     EXPECT_EQ(result["crop"].get<std::string>(), "garg") << source;
   }
+  // --raw-root: each line's fx * baseline from its drive's calibration (the simulator's colour pair is its grey
+  // pair, so the same numbers as --fxb above); without it the width table would not know this image size.
+  run = testing::RunDvso("eval-depth --json --split " + split.string() + " --pred " + pred.string() + " --gt " +
+                             gt.string() + " --raw-root " + (Seq() / "kitti_raw").string(),
+                         /*merge_stderr=*/false);
+  ASSERT_EQ(run.exit_code, 0) << run.out;
+  const nlohmann::json per_drive = nlohmann::json::parse(run.out);
+  const nlohmann::json with_fxb = nlohmann::json::parse(
+      testing::RunDvso("eval-depth --json --split " + split.string() + " --pred " + pred.string() + " --gt " +
+                           gt.string() + " --fxb " + fxb, /*merge_stderr=*/false).out);
+  EXPECT_NEAR(per_drive["abs_rel"].get<double>(), with_fxb["abs_rel"].get<double>(), 1e-6);
+  EXPECT_LT(per_drive["abs_rel"].get<double>(), 0.01);
+  EXPECT_NE(testing::RunDvso("eval-depth --split " + split.string() + " --pred " + pred.string() + " --gt " +
+                             gt.string()).exit_code, 0) << "no KITTI width: needs --raw-root or --fxb";
+  EXPECT_NE(testing::RunDvso("eval-depth --pred " + pred.string() + " --gt " + gt.string() + " --raw-root " +
+                             (Seq() / "kitti_raw").string()).exit_code, 0) << "--raw-root needs --split";
   // A stack of the wrong length is refused, naming it.
   WriteNpyStack((Dir() / "short.npy").string(), {stack[0]});
   run = testing::RunDvso("eval-depth --split " + split.string() + " --pred " + (Dir() / "short.npy").string() +
