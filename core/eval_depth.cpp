@@ -82,11 +82,11 @@ void DepthEvalOptions::Check() const {
   Require(std::isfinite(max_depth) && max_depth > min_depth, "eval-depth: max_depth must be > min_depth");
   Require(std::isfinite(fxb) && fxb >= 0.0, "eval-depth: fxb must be >= 0");
   Require((kitti_focal_by_width ? 1 : 0) + (fxb > 0.0 ? 1 : 0) + (raw_root.empty() ? 0 : 1) <= 1,
-          "eval-depth: give only one of fxb, kitti_focal_by_width and raw_root");
+          "eval-depth: give only one of --fxb (or --calib), --kitti-focal and --raw-root");
   if (pred_kind == MapKind::kDisparity || gt_kind == MapKind::kDisparity) {
     Require(fxb > 0.0 || kitti_focal_by_width || !raw_root.empty(),
-            "eval-depth: disparity maps need focal length * baseline (--fxb, --calib or --kitti-focal) "
-            "to become depths");
+            "eval-depth: disparity maps need focal length * baseline (--fxb, --calib, --kitti-focal or, with "
+            "--split, --raw-root) to become depths");
   }
   Require(std::isfinite(min_image_gradient) && min_image_gradient >= 0.0,
           "eval-depth: the minimum image gradient must be >= 0");
@@ -391,13 +391,18 @@ DepthEvalResult EvaluateDepthSplit(const std::string& split_path, const std::str
                 "no GT map for split line " + std::to_string(i + 1) + " (write them with `dvso gt-depth --split`)");
   }
   std::vector<double> fxb_per_line;  // empty: options' fx * baseline
-  if (!options.raw_root.empty()) {
+  const bool any_disparity = options.pred_kind == MapKind::kDisparity || options.gt_kind == MapKind::kDisparity;
+  if (!options.raw_root.empty() && any_disparity) {
     std::map<std::string, RawCameraCalibration> calibrations;  // one per calibration folder (raw day)
-    for (const SplitEntry& entry : entries) {
-      const std::string dir = FindRawCalibrationDir(JoinPath(options.raw_root, entry.drive));
-      auto it = calibrations.find(dir);
-      if (it == calibrations.end()) it = calibrations.emplace(dir, RawCameraCalibration(dir)).first;
-      fxb_per_line.push_back(SplitLineFxB(it->second, entry.Camera()));
+    for (size_t i = 0; i < entries.size(); ++i) {
+      try {
+        const std::string dir = FindRawCalibrationDir(JoinPath(options.raw_root, entries[i].drive));
+        auto it = calibrations.find(dir);
+        if (it == calibrations.end()) it = calibrations.emplace(dir, RawCameraCalibration(dir)).first;
+        fxb_per_line.push_back(SplitLineFxB(it->second, entries[i].Camera()));
+      } catch (const Error& e) {
+        throw Error(split_path, "entry " + std::to_string(i + 1) + " (" + entries[i].drive + "): " + e.what());
+      }
     }
   }
   if (fs::path(pred).extension() == ".npy") {

@@ -37,7 +37,7 @@ void Run(EvalDepthArgs& args, const CLI::App& cmd) {
   args.options.crop = ParseDepthCrop(args.crop);
   if (!args.calib_path.empty()) {
     Require(args.options.fxb <= 0.0 && !args.options.kitti_focal_by_width,
-            "give only one of --fxb, --calib and --kitti-focal");
+            "give only one of --fxb, --calib, --kitti-focal and --raw-root");
     // Image size does not enter fx * baseline; KITTI's 1241 x 376 keeps Check() satisfied.
     args.options.fxb = ReadKittiCalibration(args.calib_path, 1241, 376).FxB();
   }
@@ -80,8 +80,9 @@ void AddEvalDepthCommand(CLI::App& app) {
   cmd->add_option("--gt-kind", args->gt_kind, "GT holds depth (m) or disparity (px)")->capture_default_str();
   auto* fxb = cmd->add_option("--fxb", args->options.fxb,
                               "focal length (px, GT resolution) * baseline (m) to turn disparity into depth");
-  cmd->add_option("--calib", args->calib_path, "KITTI odometry calib.txt giving fx * baseline (P0, P1)")->excludes(fxb);
-  cmd->add_flag("--kitti-focal", args->options.kitti_focal_by_width,
+  auto* calib =
+      cmd->add_option("--calib", args->calib_path, "KITTI odometry calib.txt giving fx * baseline (P0, P1)")->excludes(fxb);
+  auto* kitti_focal = cmd->add_flag("--kitti-focal", args->options.kitti_focal_by_width,
                 "fx from the GT width (KITTI calibration days, as monodepth) times baseline 0.54 m")
       ->excludes(fxb);
   cmd->add_option("--crop", args->crop, "evaluation crop: none, eigen or garg")->capture_default_str();
@@ -93,11 +94,14 @@ void AddEvalDepthCommand(CLI::App& app) {
                 "scale each prediction by median(GT) / median(prediction) (monocular)");
   cmd->add_option("--split", args->split_path,
                   "split file ('<drive> <frame> <side>' lines): GT and predictions are %06d.png in split order "
-                  "(gt-depth --split); defaults become the paper's protocol: --gt-kind depth --crop garg --kitti-focal");
+                  "(gt-depth --split); defaults become the paper's protocol: --gt-kind depth --crop garg, and --kitti-focal "
+                  "unless --raw-root, --fxb or --calib gives fx * baseline");
   cmd->add_option("--raw-root", args->options.raw_root,
                   "with --split: KITTI raw root; each line's disparities become depths with its drive's calibration "
                   "(fx of camera 02/03 x colour baseline b3 - b2, monodepth's Eigen-split conversion)")
-      ->excludes(fxb);
+      ->excludes(fxb)
+      ->excludes(calib)
+      ->excludes(kitti_focal);
   cmd->add_option("--ranges", args->options.range_edges,
                   "also break the errors down by GT depth range, pixels pooled over images, with the signed "
                   "median pred/GT depth per range: increasing edges in m, e.g. 0,5,10,20,40,80")

@@ -90,6 +90,32 @@ std::string ExportedParameterName(std::string name) {
 }
 // ResidualNet's parameters, which a SimpleNet export does not carry.
 bool IsResidualParameter(const std::string& name) { return name.rfind("residual.", 0) == 0; }
+
+// The network options that change what the weights compute without being parameters: recorded by
+// TraceStackNet as attributes named like their `network.` config keys, checked by LoadWeightsFromExport.
+constexpr const char* kMaxDisparityAttribute = "max_disparity";  // SimpleNet's sigmoid scale (fraction of the width)
+constexpr const char* kLeakySlopeAttribute = "residual_leaky_slope";
+constexpr const char* kStandardizeAttribute = "standardize_residual_inputs";
+
+std::string OptionValue(const c10::IValue& value) {
+  if (value.isBool()) return value.toBool() ? "true" : "false";
+  std::ostringstream text;
+  text << value.toDouble();
+  return text.str();
+}
+
+// The export's value of one such option against the target network's. Exact: a value written the same
+// way in two configs parses to the same double, and the export keeps it bit for bit. Exports written
+// before these attributes existed have none: they load as before, unchecked (the shipped models/*.pt).
+void RequireSameOption(const torch::jit::Module& module, const std::string& model_path, const char* name,
+                       const c10::IValue& target) {
+  if (!module.hasattr(name)) return;
+  const c10::IValue exported = module.attr(name);
+  const bool same = target.isBool() ? exported.toBool() == target.toBool() : exported.toDouble() == target.toDouble();
+  RequireFile(same, model_path,
+              std::string("was exported with network.") + name + " " + OptionValue(exported) +
+                  ", the config's network has " + OptionValue(target) + ": its weights would compute something else");
+}
 }  // namespace
 
 int LoadWeightsFromExport(const std::string& model_path, StackNet& model) {
@@ -98,6 +124,13 @@ int LoadWeightsFromExport(const std::string& model_path, StackNet& model) {
   for (const auto& item : module.named_parameters(/*recurse=*/false)) exported.emplace(item.name, item.value);
   RequireFile(!exported.empty(), model_path, "has no parameters: not a model written by `dvso export`");
   const bool has_residual = module.hasattr("uses_residual") && module.attr("uses_residual").toBool();
+  const NetworkOptions& network = model->network_options();
+  RequireSameOption(module, model_path, kMaxDisparityAttribute, c10::IValue(network.max_disparity));
+  // A SimpleNet export leaves the ResidualNet as initialised, so its options are the config's alone.
+  if (has_residual) {
+    RequireSameOption(module, model_path, kLeakySlopeAttribute, c10::IValue(network.residual_leaky_slope));
+    RequireSameOption(module, model_path, kStandardizeAttribute, c10::IValue(network.standardize_residual_inputs));
+  }
   torch::NoGradGuard no_grad;
   int copied = 0;
   for (const auto& item : model->named_parameters()) {
@@ -140,6 +173,14 @@ torch::jit::Module TraceStackNet(StackNet& model, bool use_residual, int input_h
   mirror.register_attribute("input_height", c10::IntType::get(), c10::IValue(static_cast<int64_t>(input_height)));
   mirror.register_attribute("input_width", c10::IntType::get(), c10::IValue(static_cast<int64_t>(input_width)));
   mirror.register_attribute("uses_residual", c10::BoolType::get(), c10::IValue(use_residual));
+  const NetworkOptions& network = model->network_options();
+  mirror.register_attribute(kMaxDisparityAttribute, c10::FloatType::get(), c10::IValue(network.max_disparity));
+  // ResidualNet's options only where its weights travel: a SimpleNet export has no ResidualNet to describe.
+  if (use_residual) {
+    mirror.register_attribute(kLeakySlopeAttribute, c10::FloatType::get(), c10::IValue(network.residual_leaky_slope));
+    mirror.register_attribute(kStandardizeAttribute, c10::BoolType::get(),
+                              c10::IValue(network.standardize_residual_inputs));
+  }
 
   const torch::Tensor example = torch::rand({1, 3, input_height, input_width});
   auto traced_fn = [&](torch::jit::Stack inputs) -> torch::jit::Stack {

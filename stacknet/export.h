@@ -7,7 +7,10 @@
 // Exported interface: forward(image: 1x3xHxW float in [0, 1]) ->
 // (left_disparity, right_disparity), each Nx1xHxW, in pixels of the input at
 // scale 0. All resampling is by scale factor, so other sizes (multiples of 32)
-// work too. Attributes input_height / input_width give the training size.
+// work too. Attributes input_height / input_width give the training size;
+// max_disparity (and, in a StackNet export, residual_leaky_slope and
+// standardize_residual_inputs) the network options of those names that are no
+// parameters but change what the weights compute (LoadWeightsFromExport checks them).
 //
 // Metadata: the file carries the extra file `dvso_metadata.json`
 // (core/disparity_conversion.h ModelMetadata: input size, training baseline,
@@ -91,7 +94,10 @@ std::string ExportCheckpoint(const std::string& checkpoint_path, const std::stri
 // checkpoints are gone). Parameters are matched by name (the export's
 // `a_b_c` for the module's `a.b.c`) and must have the same shapes: a file of
 // another architecture is an error naming it, never a partial load. A SimpleNet
-// export sets SimpleNet only (the ResidualNet keeps its initialisation).
+// export sets SimpleNet only (the ResidualNet keeps its initialisation). The
+// non-parameter options the export records (see above) must equal the
+// network's (model->network_options()), else an error naming file and option;
+// exports from before they were recorded load unchecked.
 // Returns the number of tensors copied.
 int LoadWeightsFromExport(const std::string& model_path, StackNet& model);
 

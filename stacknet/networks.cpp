@@ -114,7 +114,7 @@ DisparityPyramid ResidualNetImpl::forward(const torch::Tensor& stacked_inputs) {
   return SplitLeftRight(decoder->forward(f));
 }
 
-StackNetImpl::StackNetImpl(const NetworkOptions& options) {
+StackNetImpl::StackNetImpl(const NetworkOptions& options) : options_(options) {
   simple = register_module("simple", SimpleNet(options));
   residual = register_module("residual", ResidualNet(options));
 }

@@ -97,8 +97,12 @@ class StackNetImpl : public torch::nn::Module {
   bool simple_net_frozen() const { return frozen_; }
   SimpleNet simple_net() const { return simple; }
   ResidualNet residual_net() const { return residual; }
+  // The options it was built with: what its weights compute depends on some that are no parameters
+  // (max_disparity, residual_leaky_slope, standardize_residual_inputs), which the export records.
+  const NetworkOptions& network_options() const { return options_; }
 
  private:
+  NetworkOptions options_;
   bool frozen_ = false;
   SimpleNet simple{nullptr};
   ResidualNet residual{nullptr};

@@ -47,6 +47,8 @@ void AugmentOptions::Check() const {
 
 void StageOptions::Check() const {
   Require(model == "simple" || model == "stack", "stage '" + name + "': model must be 'simple' or 'stack'");
+  // The name is a column of losses.csv, which a resume reads back by comma.
+  Require(name.find_first_of(",\n\"") == std::string::npos, "stage '" + name + "': a stage name has no commas or quotes");
   Require(epochs >= 0, "stage '" + name + "': epochs must be >= 0");
   Require(learning_rate > 0, "stage '" + name + "': learning_rate must be > 0");
   Require(lr_halving_every >= 0, "stage '" + name + "': lr_halving_every must be >= 0");

@@ -219,6 +219,7 @@ TrainResult Trainer::Run(const std::string& resume_checkpoint) {
     std::cerr << "Initialised " << copied << " weight tensors from " << train.init_from << "\n";
   }
   EpochSums resumed_epoch;  // the steps of the checkpoint's epoch before it (resume only)
+  const TrainingPosition resume_at = info.position;
   std::ofstream csv = OpenLossCsv(JoinPath(train.output_dir, "losses.csv"), info.position, resume, &resumed_epoch);
   std::ofstream epochs_log = OpenEpochLog(JoinPath(train.output_dir, "epochs.jsonl"), info.position, resume);
 
@@ -241,8 +242,10 @@ TrainResult Trainer::Run(const std::string& resume_checkpoint) {
                         info.position.batch, stage.max_steps_per_epoch);
       ProgressBar progress(stage.name + " epoch " + std::to_string(epoch + 1) + "/" + std::to_string(stage.epochs),
                            loader.num_batches());
-      // The first epoch of a resumed run starts from the sums of its steps before the interruption.
-      EpochSums sums = std::exchange(resumed_epoch, EpochSums{});
+      // The checkpoint's epoch starts from the sums of its steps before the interruption (that epoch only: a
+      // config with fewer epochs than the checkpoint's position skips it, and the next stage starts from 0).
+      EpochSums sums;
+      if (stage_index == resume_at.stage && epoch == resume_at.epoch) sums = std::exchange(resumed_epoch, EpochSums{});
       const auto start = std::chrono::steady_clock::now();
       for (int batch_index = info.position.batch; auto batch = loader.Next(); ++batch_index) {
         const LossTerms terms = TrainStep(model_, optimizer, stage, config_.loss, batch->to(device_));

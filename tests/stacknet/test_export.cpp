@@ -237,6 +237,75 @@ TEST(Export, ExportedWeightsInitialiseANewNetworkForFineTuning) {
   fs::remove_all(dir);
 }
 
+// Options that are no parameters change what the same weights compute; the export records them and
+// --init-from refuses a network built with other values (a raw-input ResidualNet into a standardising
+// one once loaded "successfully").
+TEST(Export, InitFromRejectsAnExportWhoseNonParameterOptionsDiffer) {
+  NetworkOptions raw = testing::TinyNetwork();
+  raw.standardize_residual_inputs = false;
+  torch::manual_seed(31);
+  StackNet source(raw);
+  const fs::path dir = fs::path(dvso::testing::ScratchPath("export_options"));
+  fs::create_directories(dir);
+  const std::string stack_path = (dir / "raw_stack.pt").string();
+  TraceStackNet(source, /*use_residual=*/true, 32, 64).save(stack_path);
+  const torch::jit::Module loaded = torch::jit::load(stack_path);
+  EXPECT_DOUBLE_EQ(loaded.attr("max_disparity").toDouble(), raw.max_disparity);
+  EXPECT_DOUBLE_EQ(loaded.attr("residual_leaky_slope").toDouble(), raw.residual_leaky_slope);
+  EXPECT_FALSE(loaded.attr("standardize_residual_inputs").toBool());
+
+  auto load_error = [&](const NetworkOptions& options) {
+    StackNet target(options);
+    try {
+      LoadWeightsFromExport(stack_path, target);
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  NetworkOptions standardized = raw;
+  standardized.standardize_residual_inputs = true;
+  const std::string standardize_error = load_error(standardized);
+  EXPECT_NE(standardize_error.find("raw_stack.pt"), std::string::npos) << standardize_error;
+  EXPECT_NE(standardize_error.find("standardize_residual_inputs false"), std::string::npos) << standardize_error;
+  EXPECT_EQ(standardize_error.find('\n'), std::string::npos) << standardize_error;
+
+  NetworkOptions wider_range = raw;
+  wider_range.max_disparity = 0.5;
+  const std::string range_error = load_error(wider_range);
+  EXPECT_NE(range_error.find("raw_stack.pt"), std::string::npos) << range_error;
+  EXPECT_NE(range_error.find("max_disparity 0.3"), std::string::npos) << range_error;
+  EXPECT_NE(range_error.find("0.5"), std::string::npos) << range_error;
+
+  NetworkOptions other_slope = raw;
+  other_slope.residual_leaky_slope = 0.2;
+  EXPECT_NE(load_error(other_slope).find("residual_leaky_slope"), std::string::npos) << load_error(other_slope);
+
+  // The same options load, and so does a SimpleNet export into a standardising network (its
+  // ResidualNet starts fresh, so the export's ResidualNet options do not apply).
+  StackNet same(raw);
+  EXPECT_EQ(LoadWeightsFromExport(stack_path, same), static_cast<int>(source->parameters().size()));
+  const std::string simple_path = (dir / "raw_simple.pt").string();
+  TraceStackNet(source, /*use_residual=*/false, 32, 64).save(simple_path);
+  StackNet fresh_residual(standardized);
+  EXPECT_EQ(LoadWeightsFromExport(simple_path, fresh_residual),
+            static_cast<int>(source->simple_net()->parameters().size()));
+  fs::remove_all(dir);
+}
+
+// Exports written before the options were recorded carry none of them and load as before, whatever
+// the target's options (nothing to compare with): the shipped model is one.
+TEST(Export, ExportsWithoutRecordedOptionsLoadAsBefore) {
+  const std::string root = std::string(DVSO_TEST_DATA_DIR) + "/..";
+  const std::string model_path = root + "/models/stacknet_cpu_main.pt";
+  ASSERT_FALSE(torch::jit::load(model_path).hasattr("standardize_residual_inputs"));
+  const ModelMetadata metadata = ReadModelMetadata(model_path);
+  NetworkOptions network = LoadConfig(root + "/configs/" + metadata.config_name + ".yaml", false).network;
+  network.standardize_residual_inputs = !network.standardize_residual_inputs;
+  StackNet target(network);
+  EXPECT_EQ(LoadWeightsFromExport(model_path, target), static_cast<int>(target->parameters().size()));
+}
+
 TEST(Export, ShippedModelNamesTheConfigItWasTrainedWith) {
   // Issue 10: the metadata carries the training config's name; for the shipped model that config
   // is in configs/ and describes the network in the file.

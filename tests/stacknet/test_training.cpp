@@ -42,6 +42,15 @@ TEST(Training, TinyNetworkOverfitsOneBatch) {
   EXPECT_LT(last, first / 5.0) << "first " << first << " last " << last;
 }
 
+TEST(Config, StageNamesCannotBreakTheLossCsv) {
+  StageOptions stage;
+  stage.model = "simple";
+  stage.name = "simple_Ko";
+  EXPECT_NO_THROW(stage.Check());
+  stage.name = "simple,Ko";  // a resume reads losses.csv back by comma
+  EXPECT_THROW(stage.Check(), Error);
+}
+
 TEST(Config, UnknownKeysAreErrorsAndYamlRoundTrips) {
   EXPECT_THROW(ParseConfig("network: {encoder_depht: 18}\n", "x.yaml", false), Error);
   EXPECT_THROW(ParseConfig("netwrk: {}\n", "x.yaml", false), Error);
