@@ -76,7 +76,10 @@ Trajectory ReadTrajectory(const std::string& path, TrajectoryFormat format,
     trajectory.poses.push_back(pose);
   }
   RequireFile(!trajectory.empty(), path, "trajectory file holds no poses");
-  if (times != nullptr && format == TrajectoryFormat::kKitti) {
+  // A TUM file carries its own timestamps: a times file beside it would be silently ignored, so it is an error.
+  RequireFile(times == nullptr || format == TrajectoryFormat::kKitti, path,
+              "is a TUM trajectory with its own timestamps: a times file applies only to KITTI-format files");
+  if (times != nullptr) {
     RequireFile(times->size() == trajectory.size(), path,
                 "times file has " + std::to_string(times->size()) + " entries for " +
                     std::to_string(trajectory.size()) + " poses");

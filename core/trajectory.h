@@ -27,7 +27,7 @@ struct Trajectory {
 
 // Reads a trajectory; kAuto decides by the number of columns (12 = KITTI,
 // 8 = TUM). Lines starting with '#' are comments. KITTI poses get timestamps
-// from `times` when given (same length), else their line index. Throws
+// from `times` when given (same length; an error for a TUM file, which has its own), else their line index. Throws
 // dvso::Error naming the file and line on any malformed input.
 Trajectory ReadTrajectory(const std::string& path, TrajectoryFormat format = TrajectoryFormat::kAuto,
                           const std::vector<double>* times = nullptr);

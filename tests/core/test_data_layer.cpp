@@ -134,6 +134,12 @@ TEST(Trajectory, KittiAndTumRoundTrip) {
     EXPECT_NEAR(u.poses[i].timestamp, 0.1 * i, 1e-12);
   }
   EXPECT_NEAR(t.PathLength(), k.PathLength(), 1e-9);
+  // A times file gives KITTI poses their timestamps; beside a TUM file (own timestamps) it is an error.
+  const std::vector<double> times = {10.0, 10.1, 10.2, 10.3, 10.4};
+  EXPECT_DOUBLE_EQ(ReadTrajectory(dir + "/k.txt", TrajectoryFormat::kAuto, &times).poses[3].timestamp, 10.3);
+  EXPECT_THROW(ReadTrajectory(dir + "/t.txt", TrajectoryFormat::kAuto, &times), Error);
+  const std::vector<double> short_times = {10.0};
+  EXPECT_THROW(ReadTrajectory(dir + "/k.txt", TrajectoryFormat::kAuto, &short_times), Error);
 }
 
 TEST(Trajectory, RealKittiPosesLoad) {
