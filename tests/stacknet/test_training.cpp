@@ -296,6 +296,14 @@ class SimulatedTraining : public ::testing::Test {
     config.Check();
     return config;
   }
+  // The resume tests' schedule: stage 0 in two epochs of 3 steps, one thread (bit-exact reruns).
+  StackNetConfig ResumeConfig(const std::string& output_dir) const {
+    StackNetConfig config = TinyConfig(output_dir);
+    config.stages[0].max_steps_per_epoch = 3;
+    config.stages[0].epochs = 2;
+    config.train.num_threads = 1;
+    return config;
+  }
   static std::string sequence_;
 };
 std::string SimulatedTraining::sequence_;
@@ -370,10 +378,7 @@ TEST_F(SimulatedTraining, InitFromStartsFromTheWeightsOfAnExportedModel) {
 
 TEST_F(SimulatedTraining, ResumeAfterAnInterruptionContinuesExactly) {
   at::set_num_threads(1);
-  StackNetConfig config = TinyConfig(TempDir("full"));
-  config.stages[0].max_steps_per_epoch = 3;
-  config.stages[0].epochs = 2;
-  config.train.num_threads = 1;
+  StackNetConfig config = ResumeConfig(TempDir("full"));
   Trainer full(config);
   ASSERT_TRUE(full.Run().finished);
 
@@ -400,10 +405,7 @@ TEST_F(SimulatedTraining, ResumeAfterAnInterruptionContinuesExactly) {
 // checkpoint, leave one record per epoch with the steps and mean loss of an uninterrupted run.
 TEST_F(SimulatedTraining, EpochLogAfterResumesHasOneRecordPerEpoch) {
   at::set_num_threads(1);
-  StackNetConfig config = TinyConfig(TempDir("epochs_full"));
-  config.stages[0].max_steps_per_epoch = 3;
-  config.stages[0].epochs = 2;
-  config.train.num_threads = 1;
+  StackNetConfig config = ResumeConfig(TempDir("epochs_full"));
   Trainer full(config);
   ASSERT_TRUE(full.Run().finished);
   auto read_log = [](const std::string& dir) {
@@ -443,6 +445,23 @@ TEST_F(SimulatedTraining, EpochLogAfterResumesHasOneRecordPerEpoch) {
   Trainer again(config);
   ASSERT_TRUE(again.Run(again.StageCheckpointPath(0)).finished);
   expect_like_full_run(config.train.output_dir, "resumed from an older checkpoint");
+
+  // Interrupted inside stage 0's second epoch, resumed with a config that has only one epoch there: that
+  // epoch is skipped, and its step before the interruption does not land in stage 1's record.
+  config.train.output_dir = TempDir("epochs_shortened");
+  Trainer inside(config, [](const TrainingPosition& p) { return p.global_step == 4; });
+  const TrainResult inside_stop = inside.Run();
+  ASSERT_TRUE(inside_stop.interrupted);
+  ASSERT_EQ(inside_stop.position.epoch, 1);
+  ASSERT_EQ(inside_stop.position.batch, 1);
+  StackNetConfig shortened = config;
+  shortened.stages[0].epochs = 1;
+  Trainer shortened_run(shortened);
+  ASSERT_TRUE(shortened_run.Run(inside_stop.last_checkpoint).finished);
+  const std::vector<nlohmann::json> records = read_log(shortened.train.output_dir);
+  ASSERT_FALSE(records.empty());
+  EXPECT_EQ(records.back()["stage"].get<int>(), 1);
+  EXPECT_EQ(records.back()["steps"].get<int>(), expected.back()["steps"].get<int>());
 }
 
 }  // namespace
