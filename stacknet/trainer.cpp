@@ -220,8 +220,8 @@ TrainResult Trainer::Run(const std::string& resume_checkpoint) {
   }
   EpochSums resumed_epoch;  // the steps of the checkpoint's epoch before it (resume only)
   const TrainingPosition resume_at = info.position;
-  std::ofstream csv = OpenLossCsv(JoinPath(train.output_dir, "losses.csv"), info.position, resume, &resumed_epoch);
-  std::ofstream epochs_log = OpenEpochLog(JoinPath(train.output_dir, "epochs.jsonl"), info.position, resume);
+  std::ofstream csv = OpenLossCsv(JoinPath(train.output_dir, "losses.csv"), resume_at, resume, &resumed_epoch);
+  std::ofstream epochs_log = OpenEpochLog(JoinPath(train.output_dir, "epochs.jsonl"), resume_at, resume);
 
   for (int stage_index = info.position.stage; stage_index < static_cast<int>(config_.stages.size()); ++stage_index) {
     const StageOptions& stage = config_.stages[stage_index];

@@ -304,6 +304,11 @@ class SimulatedTraining : public ::testing::Test {
     config.train.num_threads = 1;
     return config;
   }
+  // A run of `config` stopped (as by Ctrl-C) once it reaches global step `step`.
+  static TrainResult RunUntilStep(const StackNetConfig& config, int64_t step) {
+    Trainer trainer(config, [step](const TrainingPosition& p) { return p.global_step == step; });
+    return trainer.Run();
+  }
   static std::string sequence_;
 };
 std::string SimulatedTraining::sequence_;
@@ -383,8 +388,7 @@ TEST_F(SimulatedTraining, ResumeAfterAnInterruptionContinuesExactly) {
   ASSERT_TRUE(full.Run().finished);
 
   config.train.output_dir = TempDir("resumed");
-  Trainer interrupted(config, [](const TrainingPosition& p) { return p.global_step == 2; });
-  const TrainResult stop = interrupted.Run();
+  const TrainResult stop = RunUntilStep(config, 2);
   ASSERT_TRUE(stop.interrupted);
   EXPECT_EQ(stop.position.stage, 0);
   EXPECT_EQ(stop.position.batch, 2);
@@ -432,8 +436,7 @@ TEST_F(SimulatedTraining, EpochLogAfterResumesHasOneRecordPerEpoch) {
 
   config.train.output_dir = TempDir("epochs_resumed");
   // Step 3 is the last batch of stage 0's first epoch: the resumed run has no step left in it.
-  Trainer interrupted(config, [](const TrainingPosition& p) { return p.global_step == 3; });
-  const TrainResult stop = interrupted.Run();
+  const TrainResult stop = RunUntilStep(config, 3);
   ASSERT_TRUE(stop.interrupted);
   ASSERT_EQ(stop.position.epoch, 0);
   ASSERT_EQ(stop.position.batch, 3);
@@ -449,8 +452,7 @@ TEST_F(SimulatedTraining, EpochLogAfterResumesHasOneRecordPerEpoch) {
   // Interrupted inside stage 0's second epoch, resumed with a config that has only one epoch there: that
   // epoch is skipped, and its step before the interruption does not land in stage 1's record.
   config.train.output_dir = TempDir("epochs_shortened");
-  Trainer inside(config, [](const TrainingPosition& p) { return p.global_step == 4; });
-  const TrainResult inside_stop = inside.Run();
+  const TrainResult inside_stop = RunUntilStep(config, 4);
   ASSERT_TRUE(inside_stop.interrupted);
   ASSERT_EQ(inside_stop.position.epoch, 1);
   ASSERT_EQ(inside_stop.position.batch, 1);
