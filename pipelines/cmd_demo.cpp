@@ -108,9 +108,9 @@ void RunDemo(const DemoArgs& args) {
     prediction_args.disparity_right = JoinPath(sequence_dir, "disp_1");
     dvso_label = "dvso odometry with the exact disparities (no model in this build; no alignment)";
   }
-  const PredictionSource predictions = OpenPredictionSource(prediction_args, *sequence);
+  PredictionSource predictions = OpenPredictionSource(prediction_args, *sequence);
   vo::OdometryOptions dvso_options = odometry;
-  ApplyPredictionSource(prediction_args, predictions, &dvso_options);
+  ApplyPredictionSource(prediction_args, &predictions, &dvso_options);
   vo::SequenceRunOptions dvso_run = run;
   dvso_run.predictions = predictions.source.get();
   const auto dvso = vo::RunOdometryOnSequence(*sequence, dvso_options, vo::OdometryMode::kDvso,

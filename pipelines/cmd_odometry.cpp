@@ -37,7 +37,7 @@ void Run(const OdometryArgs& args) {
   PredictionSource predictions;
   if (vo::CapabilitiesOf(mode).has_predictions) {
     predictions = OpenPredictionSource(args.predictions, *sequence);
-    ApplyPredictionSource(args.predictions, predictions, &options);
+    ApplyPredictionSource(args.predictions, &predictions, &options);
   } else {
     Require(args.predictions.model.empty() && args.predictions.disparity_left.empty(),
             "--model / --disparity-left/right need --mode dvso");

@@ -104,7 +104,7 @@ ExperimentSetup OpenExperiment(const ExperimentArgs& args) {
   }
   const double config_virtual_baseline = setup.options.dvso.virtual_baseline;  // > 0 only when a config set it
   setup.predictions = OpenPredictionSource(args.predictions, setup.first());
-  ApplyPredictionSource(args.predictions, setup.predictions, &setup.options);
+  ApplyPredictionSource(args.predictions, &setup.predictions, &setup.options);
   setup.default_virtual_baseline = config_virtual_baseline > 0 && !(args.predictions.virtual_baseline > 0)
                                        ? config_virtual_baseline
                                        : setup.predictions.untuned_virtual_baseline;

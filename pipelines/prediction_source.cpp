@@ -37,11 +37,16 @@ void AddPredictionOptions(CLI::App* cmd, PredictionSourceArgs* args, const std::
                   "dvso with a model: LibTorch threads (default 1: fastest beside the odometry on 2 cores; 0 = cores)");
 }
 
-void ApplyPredictionSource(const PredictionSourceArgs& args, const PredictionSource& source,
+void ApplyPredictionSource(const PredictionSourceArgs& args, PredictionSource* source,
                            vo::OdometryOptions* options) {
   // b_v from the model / files unless the config sets one and no flag overrides it.
   if (!(options->dvso.virtual_baseline > 0) || args.virtual_baseline > 0) {
-    options->dvso.virtual_baseline = source.virtual_baseline;
+    options->dvso.virtual_baseline = source->virtual_baseline;
+  } else {
+    // The run header must name the b_v the run uses, not the one the source proposed.
+    std::ostringstream note;
+    note << "; the config's dvso.virtual_baseline " << options->dvso.virtual_baseline << " m is used instead";
+    source->description += note.str();
   }
   if (!args.schedule.empty()) options->dvso.prediction_timing = args.schedule;
 }

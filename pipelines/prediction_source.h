@@ -48,8 +48,10 @@ PredictionSource OpenPredictionSource(const PredictionSourceArgs& args, const Se
 std::unique_ptr<DisparitySource> OpenModelDisparitySource(const std::string& path, int threads,
                                                           ModelMetadata* metadata);
 
-// Applies what the flags say to the odometry options (b_v, prediction timing).
-void ApplyPredictionSource(const PredictionSourceArgs& args, const PredictionSource& source,
+// Applies what the flags say to the odometry options (b_v, prediction timing);
+// when a config's dvso.virtual_baseline wins over the source's b_v, the
+// source's description says so.
+void ApplyPredictionSource(const PredictionSourceArgs& args, PredictionSource* source,
                            vo::OdometryOptions* options);
 
 // Adds --model, --disparity-left/right, --virtual-baseline, --prediction-schedule,

@@ -375,6 +375,9 @@ TEST(DvsoCli, AblationAndTuneBaselinePrintEveryRow) {
                                                 /*merge_stderr=*/false);
   ASSERT_EQ(bv_config.exit_code, 0) << bv_config.out;
   EXPECT_DOUBLE_EQ(nlohmann::json::parse(bv_config.out)["virtual_baseline_default"].get<double>(), 0.5);
+  // The printed prediction line names the b_v the rows use, not the files' own 0.537 m alone.
+  const std::string described = nlohmann::json::parse(bv_config.out)["predictions"].get<std::string>();
+  EXPECT_NE(described.find("dvso.virtual_baseline 0.5 m is used instead"), std::string::npos) << described;
   const auto bv_flag = dvso::testing::RunDvso(short_ablation + " --virtual-baseline 0.45 --out " + dir + "/abl_bvf" +
                                               common, /*merge_stderr=*/false);
   ASSERT_EQ(bv_flag.exit_code, 0) << bv_flag.out;
