@@ -30,6 +30,13 @@ cv::Mat ReadKittiMapPng(const std::string& path) {
   return map;
 }
 
+cv::Mat InvalidBeyondKittiMapRange(const cv::Mat& map) {
+  Require(map.type() == CV_32FC1, "InvalidBeyondKittiMapRange expects a CV_32FC1 map");
+  cv::Mat out = map.clone();
+  out.setTo(0.f, out > kKittiMapMaxValue);
+  return out;
+}
+
 void WriteKittiMapPng(const std::string& path, const cv::Mat& map) {
   Require(map.type() == CV_32FC1, "WriteKittiMapPng expects a CV_32FC1 map (" + path + ")");
   cv::Mat out(map.size(), CV_16UC1);

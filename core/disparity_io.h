@@ -16,6 +16,14 @@ cv::Mat ReadKittiMapPng(const std::string& path);
 // 1..65535 for positive values; <= 0 or non-finite = 0 = invalid). Atomic.
 void WriteKittiMapPng(const std::string& path, const cv::Mat& map);
 
+// Largest value a KITTI uint16 PNG holds (65535 / 256 = 255.996 px or m).
+inline constexpr float kKittiMapMaxValue = 65535.0f / 256.0f;
+
+// Copy of a CV_32F ground-truth map with values the PNG cannot hold set to 0
+// (invalid): WriteKittiMapPng would clamp them, and a clamped GT value is a
+// wrong one (a 2.7 m near depth at 2x KITTI size has ~285 px of disparity).
+cv::Mat InvalidBeyondKittiMapRange(const cv::Mat& map);
+
 // Memory-mapped float32 .npy stack of shape (N, H, W) holding disparities
 // normalised by image width (monodepth / unofficial DVSO convention).
 class NpyDisparityStack {
@@ -42,7 +50,8 @@ class NpyDisparityStack {
 };
 
 // Writes a float32 (N, H, W) .npy file from N CV_32F maps of equal size
-// (values written as given). Used by tests and by `dvso predict --npy`.
+// (values written as given). Only the tests use it, for .npy fixtures of the
+// readers above (`dvso predict` writes KITTI PNGs; no command writes .npy).
 void WriteNpyStack(const std::string& path, const std::vector<cv::Mat>& maps);
 
 }  // namespace dvso

@@ -255,7 +255,7 @@ std::vector<std::string> ListPngNames(const std::string& dir) {
   std::vector<std::string> names;
   for (const auto& entry : fs::directory_iterator(dir)) {
     if (!entry.is_regular_file()) continue;
-    if (Lower(entry.path().extension().string()) != ".png") continue;
+    if (Lower(entry.path().extension().string()) != ".png" || IsUnfinishedAtomicWrite(entry.path())) continue;
     names.push_back(entry.path().filename().string());
   }
   std::sort(names.begin(), names.end());

@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <system_error>
+#include <vector>
 
 #include "core/error.h"
 
@@ -15,7 +16,7 @@ void WriteAtomically(const std::string& path,
   // Keep the extension last so that writers choosing a format by extension
   // (cv::imwrite) still work on the temporary file.
   const fs::path temp =
-      target.parent_path() / (target.stem().string() + ".tmp-writing" + target.extension().string());
+      target.parent_path() / (target.stem().string() + kAtomicWriteTag + target.extension().string());
   try {
     write(temp.string());
   } catch (...) {
@@ -31,10 +32,32 @@ void WriteAtomically(const std::string& path,
   }
 }
 
+bool IsUnfinishedAtomicWrite(const std::filesystem::path& path) {
+  const std::string stem = path.stem().string();
+  const std::string tag = kAtomicWriteTag;
+  return stem.size() >= tag.size() && stem.compare(stem.size() - tag.size(), tag.size(), tag) == 0;
+}
+
+void RemoveUnfinishedAtomicWrites(const std::string& dir) {
+  namespace fs = std::filesystem;
+  if (!fs::is_directory(dir)) return;
+  std::vector<fs::path> leftovers;
+  for (const auto& entry : fs::directory_iterator(dir)) {
+    if (entry.is_regular_file() && IsUnfinishedAtomicWrite(entry.path())) leftovers.push_back(entry.path());
+  }
+  for (const fs::path& path : leftovers) fs::remove(path);
+}
+
 void EnsureDirectory(const std::string& path) {
   std::error_code ec;
   std::filesystem::create_directories(path, ec);
   RequireFile(!ec && std::filesystem::is_directory(path), path, "cannot create directory");
+}
+
+std::filesystem::path NormalizedFolderPath(const std::string& path) {
+  std::filesystem::path p = std::filesystem::absolute(path).lexically_normal();
+  if (p.filename().empty() && p.has_parent_path()) p = p.parent_path();  // "a/drive/" -> "a/drive"
+  return p;
 }
 
 std::string JoinPath(const std::string& a, const std::string& b) {

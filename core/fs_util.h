@@ -2,6 +2,7 @@
 // killed run never leaves a truncated output file behind.
 #pragma once
 
+#include <filesystem>
 #include <functional>
 #include <optional>
 #include <string>
@@ -9,11 +10,27 @@
 namespace dvso {
 
 // Calls write(temp_path), then renames temp_path onto path. On exception the
-// temporary file is removed and the exception propagates.
+// temporary file is removed and the exception propagates. temp_path is
+// path's stem + kAtomicWriteTag + its extension, in the same folder.
 void WriteAtomically(const std::string& path, const std::function<void(const std::string&)>& write);
+
+inline constexpr const char* kAtomicWriteTag = ".tmp-writing";
+
+// True for the temporary file of a WriteAtomically that a killed process left
+// behind: folder listings skip it, it is never a result.
+bool IsUnfinishedAtomicWrite(const std::filesystem::path& path);
+
+// Removes such leftovers from `dir` (not recursive; nothing when dir does not exist): a run that
+// resumes in an output folder starts clean.
+void RemoveUnfinishedAtomicWrites(const std::string& dir);
 
 // Creates the directory (and parents); throws dvso::Error naming it on failure.
 void EnsureDirectory(const std::string& path);
+
+// A folder path made absolute, with "." and ".." resolved and no trailing separator, so that
+// filename() is the folder's own name and parent_path() its parent for "a/drive", "a/drive/",
+// "a/drive/." and "." alike.
+std::filesystem::path NormalizedFolderPath(const std::string& path);
 
 // Joins path components with '/'.
 std::string JoinPath(const std::string& a, const std::string& b);

@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "core/error.h"
+#include "core/fs_util.h"
 
 namespace dvso {
 
@@ -74,7 +75,7 @@ Eigen::Isometry3d RawCameraCalibration::RectifiedFromVelodyne() const {
 
 std::string FindRawCalibrationDir(const std::string& drive_dir) {
   const std::string name = "calib_cam_to_cam.txt";
-  for (const fs::path& dir : {fs::path(drive_dir), fs::path(drive_dir).lexically_normal().parent_path()}) {
+  for (const fs::path& dir : {fs::path(drive_dir), NormalizedFolderPath(drive_dir).parent_path()}) {
     if (fs::exists(dir / name)) return dir.string();
   }
   throw Error(drive_dir, "no " + name + " in the drive folder or its parent (KITTI raw date folder)");

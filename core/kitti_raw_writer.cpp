@@ -10,6 +10,10 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <set>
+#include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "core/disparity_io.h"
 #include "core/error.h"
@@ -63,14 +67,31 @@ void RemoveFrameFiles(const std::string& dir) {
   for (const fs::path& path : stale) fs::remove(path);
 }
 
-void WriteText(const std::string& path, const std::function<void(std::ostream&)>& body) {
+std::string TextOf(const std::function<void(std::ostream&)>& body) {
+  std::ostringstream out;
+  out << std::setprecision(17);
+  body(out);
+  return out.str();
+}
+
+void WriteText(const std::string& path, const std::string& text) {
   WriteAtomically(path, [&](const std::string& temp) {
     std::ofstream out(temp);
     RequireFile(out.good(), path, "cannot write file");
-    out << std::setprecision(17);
-    body(out);
+    out << text;
     RequireFile(out.good(), path, "write failed");
   });
+}
+
+void WriteText(const std::string& path, const std::function<void(std::ostream&)>& body) {
+  WriteText(path, TextOf(body));
+}
+
+std::string ReadWholeFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
 }
 
 void WritePng(const std::string& path, const cv::Mat& image) {
@@ -110,9 +131,9 @@ cv::Mat ToCv(const Eigen::Matrix3d& m) {
 }
 
 // calib_cam_to_cam.txt for cameras 00..03 (grey left/right, colour at the same centres).
-void WriteCamToCam(const std::string& path, const RawCamera& left, const RawCamera& right, const KittiRawRig& rig,
-                   const std::vector<double>& distortion, double baseline) {
-  WriteText(path, [&](std::ostream& out) {
+std::string CamToCamText(const RawCamera& left, const RawCamera& right, const KittiRawRig& rig,
+                         const std::vector<double>& distortion, double baseline) {
+  return TextOf([&](std::ostream& out) {
     out << "calib_time: 09-Jan-2012 13:57:47\ncorner_dist: 9.950000e-02\n";
     for (int id = 0; id < 4; ++id) {
       const RawCamera& cam = id % 2 == 0 ? left : right;
@@ -134,6 +155,32 @@ void WriteCamToCam(const std::string& path, const RawCamera& left, const RawCame
       WriteEntry(out, "P_rect" + x, P);
     }
   });
+}
+
+// The calibration files of a date folder are read by every drive of that date: one that exists
+// with other contents is replaced only when it belongs to nothing but this simulated drive (the
+// drive folder carries kSimulatedDriveMarker and no other drive of the date exists). A real KITTI
+// date folder, or another simulated drive with another camera, keeps its calibration.
+void RequireCalibrationReplaceable(const std::string& date_dir, const std::string& drive_name, bool drive_is_simulated,
+                                   const std::vector<std::pair<std::string, std::string>>& calibration) {
+  namespace fs = std::filesystem;
+  for (const auto& [path, text] : calibration) {
+    if (!fs::exists(path) || ReadWholeFile(path) == text) continue;
+    std::string other_drives;
+    if (fs::is_directory(date_dir)) {
+      for (const fs::directory_entry& entry : fs::directory_iterator(date_dir)) {
+        const std::string name = entry.path().filename().string();
+        if (entry.is_directory() && name != drive_name && name.find("_drive_") != std::string::npos) {
+          other_drives += (other_drives.empty() ? "" : ", ") + name;
+        }
+      }
+    }
+    RequireFile(drive_is_simulated && other_drives.empty(), path,
+                "exists with another calibration" +
+                    (other_drives.empty() ? std::string(" and no simulated drive of this date owns it")
+                                          : " that the drive(s) " + other_drives + " read") +
+                    "; not replaced: choose another --raw-out");
+  }
 }
 
 // Raw (distorted, unrectified) pixel -> rectified pixel of one camera: the map that warps a
@@ -202,10 +249,13 @@ std::vector<VelodynePoint> SynthesiseScan(const cv::Mat& depth, const Eigen::Mat
           in_view = true;
           const float z = depth.at<float>(static_cast<int>(v), static_cast<int>(u));
           uchar& seen = taken.at<uchar>(static_cast<int>(v), static_cast<int>(u));
-          if (z > 0 && z < o.velodyne_max_range && !seen) {
-            seen = 1;
+          if (z > 0 && !seen) {
             const Eigen::Vector3d X = velo_from_rect * (z * (K_inv * Eigen::Vector3d(u, v, 1.0)));
-            points.emplace_back(static_cast<float>(X.x()), static_cast<float>(X.y()), static_cast<float>(X.z()), 0.3f);
+            // The scanner's limit is on the range from the Velodyne, not on the camera depth.
+            if (X.norm() < o.velodyne_max_range) {
+              seen = 1;
+              points.emplace_back(static_cast<float>(X.x()), static_cast<float>(X.y()), static_cast<float>(X.z()), 0.3f);
+            }
           }
         }
       }
@@ -309,6 +359,11 @@ KittiRawDriveSummary WriteKittiRawDrive(const std::string& sequence_dir, const s
   const int cameras = summary.color ? 4 : 2;
   namespace fs = std::filesystem;
   const std::string marker = JoinPath(summary.drive_dir, kSimulatedDriveMarker);
+  const std::vector<std::pair<std::string, std::string>> calibration = {
+      {JoinPath(date_dir, "calib_imu_to_velo.txt"), TextOf([&](std::ostream& out) { WriteRigid(out, rig.velo_from_imu); })},
+      {JoinPath(date_dir, "calib_velo_to_cam.txt"), TextOf([&](std::ostream& out) { WriteRigid(out, rig.cam0_from_velo); })},
+      {JoinPath(date_dir, "calib_cam_to_cam.txt"), CamToCamText(left, right, rig, options.distortion, camera.baseline)}};
+  RequireCalibrationReplaceable(date_dir, drive_name, fs::exists(marker), calibration);
   if (fs::is_directory(summary.drive_dir) && !fs::is_empty(summary.drive_dir)) {
     RequireFile(fs::exists(marker), summary.drive_dir,
                 "exists and was not written by `dvso simulate` (no " + std::string(kSimulatedDriveMarker) +
@@ -420,9 +475,7 @@ KittiRawDriveSummary WriteKittiRawDrive(const std::string& sequence_dir, const s
   }
   WriteTimestamps(JoinPath(summary.drive_dir, "velodyne_points/timestamps.txt"), left_times);
   WriteTimestamps(JoinPath(summary.drive_dir, "oxts/timestamps.txt"), oxts_times);
-  WriteText(JoinPath(date_dir, "calib_imu_to_velo.txt"), [&](std::ostream& out) { WriteRigid(out, rig.velo_from_imu); });
-  WriteText(JoinPath(date_dir, "calib_velo_to_cam.txt"), [&](std::ostream& out) { WriteRigid(out, rig.cam0_from_velo); });
-  WriteCamToCam(JoinPath(date_dir, "calib_cam_to_cam.txt"), left, right, rig, options.distortion, camera.baseline);
+  for (const auto& [path, text] : calibration) WriteText(path, text);
   return summary;
 }
 

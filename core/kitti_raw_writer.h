@@ -91,7 +91,9 @@ struct KittiRawDriveSummary {
 // files and timestamps are removed first, so a shorter or grey rerun leaves nothing of it behind.
 // Throws dvso::Error naming the file when the sequence lacks depth_0/, poses.txt or images, when
 // the distortion would leave part of a rectified image outside its raw image, or when the drive
-// folder exists without the marker (e.g. a real KITTI drive of the same name: never touched).
+// folder exists without the marker (e.g. a real KITTI drive of the same name: never touched), or
+// when a calibration file of the date folder exists with other contents and any other drive of the
+// date (real or simulated) reads it: a drive's calibration is never changed under it.
 KittiRawDriveSummary WriteKittiRawDrive(const std::string& sequence_dir, const std::string& raw_root,
                                         const KittiRawDriveOptions& options, bool show_progress = false);
 

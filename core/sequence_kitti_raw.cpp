@@ -71,7 +71,7 @@ std::vector<double> ReadKittiRawTimestamps(const std::string& path) {
 }
 
 bool IsKittiRawExtractDrive(const std::string& path) {
-  return fs::path(path).lexically_normal().filename().string().find("_extract") != std::string::npos;
+  return NormalizedFolderPath(path).filename().string().find("_extract") != std::string::npos;
 }
 
 namespace {

@@ -131,18 +131,20 @@ SimulationSummary WriteSimulatedSequence(const SimulatorOptions& options, const 
   for (int i = 0; i < n; ++i) {
     const SimulatedFrame frame = simulator.Render(i);
     const std::string name = FrameFileName(i, ".png");
-    // Depth beyond the uint16 range (256 m) is marked invalid, not clamped.
-    cv::Mat depth = frame.left.depth.clone();
-    depth.setTo(0.f, depth >= 255.99f);
+    // Depth beyond the uint16 range (256 m) and disparities beyond 256 px (near surfaces of large
+    // images or long baselines) are marked invalid, not clamped.
+    const cv::Mat depth = InvalidBeyondKittiMapRange(frame.left.depth);
+    const cv::Mat disparity_left = InvalidBeyondKittiMapRange(frame.disparity_left);
+    const cv::Mat disparity_right = InvalidBeyondKittiMapRange(frame.disparity_right);
     // Two writers in parallel: PNG compression is a good part of the time per frame.
     auto second = std::async(std::launch::async, [&]() {
       WritePng(JoinPath(JoinPath(output_dir, "image_1"), name), frame.right.grey);
-      WriteKittiMapPng(JoinPath(JoinPath(output_dir, "disp_0"), name), frame.disparity_left);
+      WriteKittiMapPng(JoinPath(JoinPath(output_dir, "disp_0"), name), disparity_left);
       if (options.color) WritePng(JoinPath(JoinPath(output_dir, "image_3"), name), frame.right.color);
     });
     WritePng(JoinPath(JoinPath(output_dir, "image_0"), name), frame.left.grey);
     WriteKittiMapPng(JoinPath(JoinPath(output_dir, "depth_0"), name), depth);
-    WriteKittiMapPng(JoinPath(JoinPath(output_dir, "disp_1"), name), frame.disparity_right);
+    WriteKittiMapPng(JoinPath(JoinPath(output_dir, "disp_1"), name), disparity_right);
     if (options.color) WritePng(JoinPath(JoinPath(output_dir, "image_2"), name), frame.left.color);
     second.get();
 
@@ -189,6 +191,10 @@ SimulationSummary WriteSimulatedSequence(const SimulatorOptions& options, const 
             static_cast<uint16_t>(std::lround(65535.0 * std::max(0.0, 1.0 - options.vignetting_strength * r2 / half_diagonal_sq)));
       }
     WritePng(JoinPath(output_dir, "vignette.png"), vignette);
+  } else {
+    // An earlier vignetted simulation's map would make a photometric calibration correct images that
+    // have no vignetting.
+    std::filesystem::remove(JoinPath(output_dir, "vignette.png"));
   }
   summary.frames = n;
   summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

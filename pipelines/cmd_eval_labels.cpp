@@ -8,6 +8,7 @@
 
 #include "core/disparity_io.h"
 #include "core/error.h"
+#include "core/fs_util.h"
 #include "pipelines/commands.h"
 #include "sdso_labels/label_error_kinds.h"
 #include "sdso_labels/label_stats.h"
@@ -37,7 +38,7 @@ void Run(const EvalLabelsArgs& args) {
   }
   std::vector<fs::path> files;
   for (const auto& entry : fs::directory_iterator(args.labels_dir))
-    if (entry.path().extension() == ".png") files.push_back(entry.path());
+    if (entry.path().extension() == ".png" && !IsUnfinishedAtomicWrite(entry.path())) files.push_back(entry.path());
   std::sort(files.begin(), files.end());
   RequireFile(!files.empty(), args.labels_dir, "no .png label maps");
   if (!args.pictures_dir.empty()) fs::create_directories(args.pictures_dir);

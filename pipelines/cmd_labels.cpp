@@ -4,6 +4,7 @@
 #include <map>
 #include <memory>
 
+#include "core/config_yaml.h"
 #include "core/error.h"
 #include "core/fs_util.h"
 #include "pipelines/commands.h"
@@ -16,6 +17,7 @@ namespace {
 struct LabelsArgs {
   std::string sequence, list, out, config, gt_disparity, gt_subdir, gt_disparity_right, gt_subdir_right,
       preset = "default", cameras = "grey";
+  bool preset_given = false;  // --preset on the command line
   int first = 0, count = -1;
   bool json = false, overwrite = false, quiet = false, worker_thread = false, right_labels = false;
 };
@@ -26,7 +28,16 @@ void RunLabels(const LabelsArgs& args) {
           "--gt-disparity(-right) is for one sequence; with --list use --gt-subdir(-right) NAME (e.g. disp_0)");
   labels::LabelRunOptions options;
   if (!args.config.empty()) {
-    options = labels::LoadLabelRunOptions(args.config);
+    // --preset is the base the config's odometry keys change (as in `dvso odometry`), unless the
+    // config names its own preset: then a different --preset contradicts it.
+    if (args.preset_given) {
+      YamlSection config = YamlSection::FromFile(args.config);
+      std::string config_preset = args.preset;
+      config.Read("preset", &config_preset);
+      RequireFile(config_preset == args.preset, args.config,
+                  "names preset '" + config_preset + "' but --preset " + args.preset + " was given");
+    }
+    options = labels::LoadLabelRunOptions(args.config, args.preset);
   } else {
     options.odometry = vo::OdometryOptions::Preset(args.preset);
   }
@@ -48,11 +59,7 @@ void RunLabels(const LabelsArgs& args) {
   const std::vector<std::string> sequences =
       args.list.empty() ? std::vector<std::string>{args.sequence} : labels::ReadSequenceList(args.list);
   // With --list, each sequence writes into OUT/<its folder name> ("a/seq/" is "seq" too).
-  auto folder_name = [](const std::string& sequence) {
-    std::filesystem::path p = std::filesystem::path(sequence).lexically_normal();
-    if (p.filename().empty()) p = p.parent_path();
-    return p.filename().string();
-  };
+  auto folder_name = [](const std::string& sequence) { return NormalizedFolderPath(sequence).filename().string(); };
   if (!args.list.empty()) {
     // Two sequences with the same folder name would share (and skip) one output folder.
     std::map<std::string, std::string> owner;
@@ -116,7 +123,9 @@ void AddLabelsCommand(CLI::App& app) {
   cmd->add_option("--list", args->list, "Batch: file listing one sequence directory per line");
   cmd->add_option("--out", args->out, "Output directory (batch: one subfolder per sequence)")->required();
   cmd->add_option("--config", args->config, "YAML with 'labels:', 'odometry:' and 'preset:' keys");
-  cmd->add_option("--preset", args->preset, "Odometry preset without --config: default|fast");
+  cmd->add_option("--preset", args->preset,
+                  "Odometry preset: default|fast (with --config: the base its odometry keys change, unless it names "
+                  "its own preset)");
   cmd->add_option("--gt-disparity", args->gt_disparity, "GT disparity folder (%06d.png) for accuracy statistics");
   cmd->add_option("--gt-subdir", args->gt_subdir, "Batch: GT disparity subfolder inside each sequence (e.g. disp_0)");
   cmd->add_flag("--right-labels", args->right_labels, "Also label the right image (OUT/right/%06d.png)");
@@ -131,7 +140,10 @@ void AddLabelsCommand(CLI::App& app) {
   cmd->add_flag("--quiet", args->quiet, "No progress bars");
   cmd->add_flag("--worker-thread", args->worker_thread,
                 "Produce labels on a worker thread beside the odometry (helps only with a spare core)");
-  cmd->callback([args] { RunLabels(*args); });
+  cmd->callback([args, cmd] {
+    args->preset_given = cmd->count("--preset") > 0;
+    RunLabels(*args);
+  });
 }
 
 }  // namespace dvso::cli

@@ -51,7 +51,10 @@ void Run(const OxtsPosesArgs& args) {
     RequireFile(packet_times.size() == packets.size(), oxts_times_path,
                 std::to_string(packet_times.size()) + " timestamps for " + std::to_string(packets.size()) +
                     " OXTS packets");
-    image_times = ReadKittiRawTimestamps(JoinPath(args.drive_dir, "image_0" + std::to_string(args.camera) +
+    // Frames are named after the pair's LEFT camera (00 or 02): its timestamps, even for --camera 1|3,
+    // whose own files are numbered separately once it has dropped a frame.
+    const int left_camera = args.camera - args.camera % 2;
+    image_times = ReadKittiRawTimestamps(JoinPath(args.drive_dir, "image_0" + std::to_string(left_camera) +
                                                                       "/timestamps.txt"));
   }
   Eigen::Isometry3d first_inverse = Eigen::Isometry3d::Identity();

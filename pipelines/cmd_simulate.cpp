@@ -23,6 +23,8 @@ struct SimulateArgs {
   std::string raw_layout = "none";   // none | sync | extract
   std::string raw_out;               // root of the raw date folder (default OUT/kitti_raw)
   int raw_drop_every = 0;            // extract: the right cameras lose every n-th frame
+  bool exposure_level_given = false; // --exposure-level on the command line
+  bool raw_drive_given = false;      // --raw-drive on the command line
   SimulatorOptions options;
   KittiRawDriveOptions raw;
 };
@@ -45,9 +47,14 @@ void Run(SimulateArgs& args) {
   o.scene.shadows = !args.no_shadows;
   o.edge_antialiasing = !args.no_edge_aa;
   o.vary_appearance = args.appearance == "varied";
+  // The varied look draws the exposure from the seed: a given level would be silently replaced.
+  Require(!(o.vary_appearance && args.exposure_level_given),
+          "--exposure-level acts with --appearance fixed only (the varied look draws it from the seed)");
   o.Check();
   Require(args.raw_layout == "none" || args.raw_layout == "sync" || args.raw_layout == "extract",
           "--raw-layout must be none, sync or extract");
+  Require(args.raw_layout != "none" || (args.raw_out.empty() && !args.raw_drive_given),
+          "--raw-out / --raw-drive need --raw-layout sync|extract");
   Require(args.raw_drop_every >= 0, "--raw-drop-every must be >= 0");
   Require(args.raw_drop_every == 0 || args.raw_layout == "extract", "--raw-drop-every needs --raw-layout extract");
   args.raw.extract = args.raw_layout == "extract";
@@ -140,11 +147,20 @@ void AddSimulateCommand(CLI::App& app) {
   cmd->add_option("--raw-out", args->raw_out,
                   "root of the raw date folder (default OUT/kitti_raw); a drive folder an earlier simulation wrote "
                   "there is replaced, any other existing one is refused");
+  cmd->add_option("--raw-drive", args->raw.drive,
+                  "drive number of the raw drive (DATE_drive_NNNN_sync|extract): several simulations of one camera "
+                  "can share a --raw-out; the date folder's calibration files are never replaced when another "
+                  "drive reads them")
+      ->capture_default_str();
   cmd->add_option("--raw-drop-every", args->raw_drop_every,
                   "extract drives: the right cameras lose every n-th frame (0 = none)")
       ->capture_default_str();
   cmd->add_flag("--quiet", args->quiet, "no progress bar");
-  cmd->callback([args] { Run(*args); });
+  cmd->callback([args, cmd] {
+    args->exposure_level_given = cmd->count("--exposure-level") > 0;
+    args->raw_drive_given = cmd->count("--raw-drive") > 0;
+    Run(*args);
+  });
 }
 
 }  // namespace dvso::cli

@@ -28,10 +28,10 @@ void LabelRunOptions::Check() const {
   Require(image_cache_pairs >= 1, "labels: image_cache_pairs must be >= 1");
 }
 
-LabelRunOptions LoadLabelRunOptions(const std::string& path) {
+LabelRunOptions LoadLabelRunOptions(const std::string& path, const std::string& preset_without_key) {
   YamlSection root = YamlSection::FromFile(path);
   LabelRunOptions options;
-  std::string preset = "default";
+  std::string preset = preset_without_key;
   root.Read("preset", &preset);
   options.odometry = vo::OdometryOptions::Preset(preset);
   YamlSection& labels = root.Child("labels");
@@ -179,6 +179,10 @@ LabelRunSummary RunLabelExtraction(const std::string& sequence_dir, const std::s
   Require(options.first < sequence->size(), sequence_dir + ": first frame beyond the sequence");
   const int end = RunEndFrame(sequence->size(), options.first, options.count);
   EnsureDirectory(out_dir);
+  // A killed earlier run may have left a half-written map's temporary file; nothing reads it, but it
+  // is no result either.
+  RemoveUnfinishedAtomicWrites(out_dir);
+  RemoveUnfinishedAtomicWrites(fs::path(LabelProducer::LabelPath(out_dir, 0, true)).parent_path().string());
 
   LabelRunSummary summary;
   summary.sequence = sequence_dir;

@@ -34,8 +34,9 @@ struct LabelRunOptions {
 };
 
 // Loads `labels:` and `odometry:` sections (strict keys) plus an optional
-// `preset:` (default|fast) for the odometry; absent keys keep the defaults.
-LabelRunOptions LoadLabelRunOptions(const std::string& path);
+// `preset:` (default|fast) for the odometry, `preset_without_key` when the file
+// names none (`dvso labels --preset`); absent keys keep the defaults.
+LabelRunOptions LoadLabelRunOptions(const std::string& path, const std::string& preset_without_key = "default");
 std::string LabelRunOptionsToYaml(const LabelRunOptions& options);
 
 struct LabelRunSummary {

@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
+#include <set>
+#include <utility>
 
 #include "core/error.h"
 
@@ -94,6 +97,7 @@ void LabelWriter::ReleaseRecentPast() {
 void LabelWriter::OnWindowOptimized(const vo::WindowEvent& event) {
   window_.clear();
   for (const auto& kf : event.keyframes) window_.push_back(kf.frame_index);
+  ForgetActivatedCandidates(event.points);
   // A new keyframe also labels the earlier frames still waiting for later keyframes.
   const int newest = event.frame_index;
   for (PendingFrame& frame : pending_) {
@@ -102,6 +106,22 @@ void LabelWriter::OnWindowOptimized(const vo::WindowEvent& event) {
     frame.hosts.push_back(newest);
     AddUser(newest);
     --frame.future_hosts_wanted;
+  }
+}
+
+void LabelWriter::ForgetActivatedCandidates(const std::vector<vo::PointInfo>& active_points) {
+  // A candidate DSO activated is an active point now (same host pixel): it labels through the
+  // optimised point and its filters (Usable, the stereo-energy ratio), never as an unfiltered copy.
+  if (keyframe_candidates_.empty()) return;
+  std::map<int, std::set<std::pair<float, float>>> active_pixels;
+  for (const vo::PointInfo& p : active_points) {
+    if (keyframe_candidates_.count(p.host_frame_index)) active_pixels[p.host_frame_index].insert({p.u, p.v});
+  }
+  for (auto& [host, pixels] : active_pixels) {
+    std::vector<vo::PointInfo>& kept = keyframe_candidates_[host];
+    kept.erase(std::remove_if(kept.begin(), kept.end(),
+                              [&](const vo::PointInfo& c) { return pixels.count({c.u, c.v}) > 0; }),
+               kept.end());
   }
 }
 

@@ -119,6 +119,7 @@ class LabelWriter : public vo::OdometryObserver {
   };
 
   bool InDepthRange(const vo::PointInfo& point) const;  // positive inverse depth, not beyond max_depth
+  void ForgetActivatedCandidates(const std::vector<vo::PointInfo>& active_points);
   bool Usable(const vo::PointInfo& point) const;
   void AddUser(int host);
   void RemoveUser(int host);

@@ -104,6 +104,25 @@ TEST(Cli, OdometryOnMissingSequenceFailsCleanly) {
   EXPECT_FALSE(fs::exists(dir + "/out/trajectory.txt"));
 }
 
+// `dvso labels --config C --preset P`: P is the base C's odometry keys change (as in `dvso odometry`); a C
+// that names another preset contradicts P.
+TEST(Cli, LabelsPresetIsTheBaseOfAConfigWithoutOne) {
+  const std::string dir = dvso::testing::FreshSimulatedSequence("labels_preset", 3);
+  ASSERT_FALSE(dir.empty());
+  std::ofstream(dir + "/labels_only.yaml") << "labels:\n  max_depth: 50\n";
+  const CliRun fast = RunDvso("labels --quiet --preset fast --config " + dir + "/labels_only.yaml --sequence " + dir +
+                              "/seq --out " + dir + "/fast");
+  ASSERT_EQ(fast.exit_code, 0) << fast.out;
+  EXPECT_NE(fast.out.find("active_points: 800"), std::string::npos) << fast.out;  // the fast preset's
+  EXPECT_NE(fast.out.find("max_depth: 50"), std::string::npos) << fast.out;
+  std::ofstream(dir + "/named.yaml") << "preset: default\nlabels:\n  max_depth: 50\n";
+  const CliRun contradiction = RunDvso("labels --quiet --preset fast --config " + dir + "/named.yaml --sequence " +
+                                       dir + "/seq --out " + dir + "/named");
+  EXPECT_EQ(contradiction.exit_code, 1);
+  EXPECT_NE(contradiction.out.find("named.yaml"), std::string::npos) << contradiction.out;
+  EXPECT_NE(contradiction.out.find("--preset fast"), std::string::npos) << contradiction.out;
+}
+
 TEST(Cli, EvalLabelsCountsWrongLabelsByPlaceAndNamesAMissingGroundTruth) {
   const std::string dir = TempDir("eval_labels");
   fs::create_directories(dir + "/labels");
@@ -123,6 +142,13 @@ TEST(Cli, EvalLabelsCountsWrongLabelsByPlaceAndNamesAMissingGroundTruth) {
   EXPECT_EQ(j["by_kind"]["thin"]["wrong"].get<int>(), 1);
   EXPECT_EQ(j["by_kind"]["other"]["labels"].get<int>(), 1);
   EXPECT_EQ(j["by_kind"]["other"]["wrong"].get<int>(), 0);
+
+  // The temporary file of a killed writer is no label map (dvso labels removes it when it resumes).
+  std::ofstream(dir + "/labels/000002.tmp-writing.png") << "half a PNG";
+  const CliRun leftover = RunDvso("eval-labels --labels " + dir + "/labels --gt " + dir + "/gt --json");
+  ASSERT_EQ(leftover.exit_code, 0) << leftover.out;
+  EXPECT_EQ(nlohmann::json::parse(leftover.out.substr(leftover.out.find('{')))["compared_labels"].get<int>(), 2);
+  fs::remove(dir + "/labels/000002.tmp-writing.png");
 
   dvso::WriteKittiMapPng(dir + "/labels/000001.png", labels);  // no GT for this one
   const CliRun missing = RunDvso("eval-labels --labels " + dir + "/labels --gt " + dir + "/gt");

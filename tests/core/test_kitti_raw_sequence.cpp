@@ -7,6 +7,7 @@
 // round-trip; extract drives are rectified on read and paired by timestamp.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -17,6 +18,7 @@
 #include "core/depth_split.h"
 #include "core/disparity_io.h"
 #include "core/error.h"
+#include "core/kitti_raw_writer.h"
 #include "core/kitti_velodyne.h"
 #include "core/sequence.h"
 #include "core/trajectory.h"
@@ -397,6 +399,69 @@ TEST(KittiRawSequence, ShorterRerunIntoTheSameDriveLeavesNoStaleFrames) {
   EXPECT_EQ(count(drive / "image_00/data"), 3);
 }
 
+// The date folder's calibration files are read by every drive of the date: a simulation never replaces
+// them under another drive (a real KITTI date folder with only its calibration and other drives, or an
+// earlier simulated drive of another camera); the same camera can share them, and a rerun of the only
+// drive may change them.
+TEST(KittiRawSequence, CalibrationOfTheDateFolderIsNeverChangedUnderAnotherDrive) {
+  const std::string dir = testing::ScratchDir("kitti_raw_calibration");
+  const std::string raw = dir + "/raw";
+  const std::string common = " --quiet --count 2 --width 160 --height 64 --texture-size 64 --raw-layout sync";
+  const fs::path date = fs::path(raw) / "2011_09_26";
+  const auto read = [](const fs::path& path) {
+    std::ifstream in(path);
+    return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  };
+  // A "real" date folder: its own calibration and a drive without the simulation's marker.
+  fs::create_directories(date / "2011_09_26_drive_0002_sync/image_00/data");
+  std::ofstream(date / "calib_cam_to_cam.txt") << "calib_time: 09-Jan-2012 13:57:47\nP_rect_00: 721.5 0 609.6 0 0 "
+                                                  "721.5 172.9 0 0 0 1 0\n";
+  const std::string real = read(date / "calib_cam_to_cam.txt");
+  const testing::CliRun refused = testing::RunDvso("simulate --out " + dir + "/a --raw-out " + raw + common);
+  EXPECT_NE(refused.exit_code, 0);
+  EXPECT_NE(refused.out.find("2011_09_26_drive_0002_sync"), std::string::npos) << refused.out;
+  EXPECT_NE(refused.out.find("calib_cam_to_cam.txt"), std::string::npos) << refused.out;
+  EXPECT_EQ(read(date / "calib_cam_to_cam.txt"), real);
+
+  // Simulated drives only: a second drive of the same camera shares the calibration, one of another
+  // camera (baseline) is refused, and the first drive's calibration stays.
+  const std::string sim_root = dir + "/sim";
+  ASSERT_EQ(testing::RunDvso("simulate --out " + dir + "/b --raw-out " + sim_root + common).exit_code, 0);
+  const fs::path sim_date = fs::path(sim_root) / "2011_09_26";
+  const std::string first = read(sim_date / "calib_cam_to_cam.txt");
+  EXPECT_EQ(testing::RunDvso("simulate --out " + dir + "/c --seed 5 --raw-drive 2 --raw-out " + sim_root + common)
+                .exit_code, 0);
+  EXPECT_TRUE(fs::exists(sim_date / "2011_09_26_drive_0002_sync" / "image_00/data/0000000001.png"));
+  const testing::CliRun other_camera = testing::RunDvso("simulate --out " + dir + "/d --baseline 0.3 --raw-drive 3 "
+                                                        "--raw-out " + sim_root + common);
+  EXPECT_NE(other_camera.exit_code, 0);
+  EXPECT_NE(other_camera.out.find("2011_09_26_drive_0001_sync"), std::string::npos) << other_camera.out;
+  EXPECT_EQ(read(sim_date / "calib_cam_to_cam.txt"), first);
+  // The only drive of a date, rerun with another camera, takes its calibration along.
+  const std::string alone = dir + "/alone";
+  ASSERT_EQ(testing::RunDvso("simulate --out " + dir + "/e --raw-out " + alone + common).exit_code, 0);
+  const std::string before = read(fs::path(alone) / "2011_09_26/calib_cam_to_cam.txt");
+  ASSERT_EQ(testing::RunDvso("simulate --out " + dir + "/f --baseline 0.3 --raw-out " + alone + common).exit_code, 0);
+  EXPECT_NE(read(fs::path(alone) / "2011_09_26/calib_cam_to_cam.txt"), before);
+}
+
+// velodyne_max_range limits the range from the scanner, as on the HDL-64E, not the camera depth (which
+// let in-view points at the image edges reach ~1.3x the limit).
+TEST(KittiRawSequence, SyntheticScanKeepsEveryPointWithinTheScannersRange) {
+  const std::string dir = testing::FreshSimulatedSequence("kitti_raw_range", 2);
+  ASSERT_FALSE(dir.empty());
+  KittiRawDriveOptions options;
+  options.velodyne_max_range = 12.0;
+  const KittiRawDriveSummary summary = WriteKittiRawDrive(dir + "/seq", dir + "/raw", options);
+  const std::vector<VelodynePoint> scan =
+      ReadVelodyneScan((fs::path(summary.drive_dir) / "velodyne_points/data/0000000001.bin").string());
+  ASSERT_GT(scan.size(), 100u);
+  double farthest = 0.0;
+  for (const VelodynePoint& p : scan) farthest = std::max(farthest, static_cast<double>(p.head<3>().norm()));
+  EXPECT_LT(farthest, options.velodyne_max_range);
+  EXPECT_GT(farthest, 0.8 * options.velodyne_max_range);  // the limit, not something nearer, cuts the scan
+}
+
 TEST(KittiRawSequence, ExtractDriveIsRectifiedOnReadAndPairedByTimestamp) {
   // The right cameras lose every 9th frame (9, 18, 27, 36).
   const std::string dir_name = testing::FreshSimulatedSequence(
@@ -449,6 +514,21 @@ TEST(KittiRawSequence, ExtractDriveIsRectifiedOnReadAndPairedByTimestamp) {
   for (const auto& [line, frame] : frames) {
     const Eigen::Isometry3d error = gt_poses.poses[frame].T_world_camera.inverse() * oxts.poses[line].T_world_camera;
     EXPECT_LT(error.translation().norm(), 1e-4) << "line " << line;
+  }
+  // The right camera (its own file numbers shifted by the drops) through a drive path with a trailing
+  // slash: frames are timed by the left camera's timestamps, the drive is still an extract drive and
+  // its calibration is in the date folder above it.
+  const fs::path right_path = fs::path(dir_name) / "oxts_poses_right.txt";
+  const testing::CliRun right_run = testing::RunDvso("oxts-poses --camera 1 --sequence " + drive.string() +
+                                                     "/ --out " + right_path.string());
+  ASSERT_EQ(right_run.exit_code, 0) << right_run.out;
+  const Trajectory right = ReadTrajectory(right_path.string(), TrajectoryFormat::kKitti);
+  ASSERT_EQ(right.size(), b.size());
+  Eigen::Isometry3d left_from_right = Eigen::Isometry3d::Identity();
+  left_from_right.translation().x() = odometry_layout->camera().baseline;
+  for (const auto& [line, frame] : frames) {
+    const Eigen::Isometry3d expected = left_from_right.inverse() * gt_poses.poses[frame].T_world_camera * left_from_right;
+    EXPECT_LT((expected.inverse() * right.poses[line].T_world_camera).translation().norm(), 1e-4) << "line " << line;
   }
 
   // Text Velodyne scans (the extract format) give the same depth GT.

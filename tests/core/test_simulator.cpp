@@ -12,6 +12,7 @@
 #include <functional>
 #include <memory>
 #include <opencv2/imgcodecs.hpp>
+#include <string>
 #include <vector>
 
 #include "core/disparity_io.h"
@@ -330,6 +331,40 @@ TEST(Simulator, WritesKittiLayoutWithGroundTruth) {
   EXPECT_EQ(reader->Read(2).left.cols, 160);
   EXPECT_TRUE(fs::exists(dir / "exposures.txt"));
   EXPECT_TRUE(fs::exists(dir / "vignette.png"));
+
+  // A rerun into the same folder without vignetting leaves no vignette map of the first run; with a
+  // 9.5 m baseline at 480x144 the near road has disparities beyond the PNG's 255.996 px: invalid (0),
+  // never clamped.
+  const int frames = o.num_frames, stride = o.stride;
+  o = SmallOptions(480, 144);
+  o.num_frames = frames;
+  o.stride = stride;
+  o.vignetting = false;
+  o.camera.baseline = 9.5;
+  WriteSimulatedSequence(o, dir.string(), false);
+  EXPECT_FALSE(fs::exists(dir / "vignette.png"));
+  const double fx_b = o.camera.left.fx * o.camera.baseline;
+  int beyond = 0, right = 0;
+  for (const char* sub : {"disp_0", "disp_1"}) {
+    const cv::Mat far_depth = ReadKittiMapPng((dir / "depth_0" / "000001.png").string());
+    const cv::Mat long_baseline = ReadKittiMapPng((dir / sub / "000001.png").string());
+    for (int y = 0; y < long_baseline.rows; ++y)
+      for (int x = 0; x < long_baseline.cols; ++x) {
+        const float d = long_baseline.at<float>(y, x);
+        EXPECT_LT(d, kKittiMapMaxValue) << sub << " (" << x << ", " << y << ")";
+        const float z = far_depth.at<float>(y, x);
+        if (std::string(sub) == "disp_0" && z > 0 && fx_b / z > kKittiMapMaxValue) {
+          ++beyond;
+          EXPECT_EQ(d, 0.f) << "(" << x << ", " << y << ")";
+        }
+        if (std::string(sub) == "disp_0" && z > 0 && d > 0) {
+          ++right;
+          EXPECT_NEAR(z * d, fx_b, (z + d) * 0.5 / 256 + 1e-3);
+        }
+      }
+  }
+  EXPECT_GT(beyond, 0);
+  EXPECT_GT(right, 0);
   fs::remove_all(dir);
 }
 
@@ -504,6 +539,17 @@ TEST(Simulator, CommandLine) {
   EXPECT_NE(std::system(wrong_look.c_str()), 0);
   const std::string bad = dvso + " simulate --count 2 --stride 0 --out " + dir.string() + " > /dev/null 2>&1";
   EXPECT_NE(std::system(bad.c_str()), 0);
+  // Options that would be silently replaced or unused are errors: the varied look draws the exposure
+  // level from the seed; --raw-out / --raw-drive only act with a raw layout.
+  const std::string small = dvso + " simulate --width 128 --height 40 --count 1 --texture-size 128 --quiet --out " +
+                            dir.string() + "_unused";
+  for (const char* unused : {" --appearance varied --exposure-level 0.7", " --raw-out /tmp/unused_raw", " --raw-drive 3"}) {
+    const std::string command = small + unused + " > /dev/null 2>&1";
+    EXPECT_NE(std::system(command.c_str()), 0) << unused;
+  }
+  const std::string fixed_level = small + " --exposure-level 0.7 > /dev/null 2>&1";
+  EXPECT_EQ(std::system(fixed_level.c_str()), 0);
+  fs::remove_all(dir.string() + "_unused");
   fs::remove_all(dir);
 }
 

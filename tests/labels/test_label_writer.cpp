@@ -155,6 +155,29 @@ TEST(LabelWriter, KeyframeCandidatesLabelOnlyTheirOwnKeyframe) {
   }
 }
 
+// A candidate that DSO activates becomes an active point at the same host pixel: it labels only through
+// that point and its filters, never a second time as an unfiltered candidate.
+TEST(LabelWriter, ActivatedKeyframeCandidateIsNotLabelledAgainAsACandidate) {
+  const std::string out = TempDir() + "_activated";
+  std::map<int, cv::Mat> seen;
+  LabelOptions options;
+  options.future_keyframes = 0;
+  options.keyframe_candidates = true;
+  LabelWriter writer(Camera(), options, out, Collect(&seen));
+  StartAtKeyframeZero(&writer);
+  writer.OnKeyframeCandidates(0, {Point(0, 20, 10, 0.1, 0), Point(0, 5, 5, 0.5, 0)});
+  // The next window optimisation has the first candidate as an active point of keyframe 0.
+  vo::WindowEvent window = Window(1, {{0, Eigen::Isometry3d::Identity()}, {1, Forward(1.0)}});
+  window.points.push_back(Point(0, 20, 10, 0.1, 3));
+  writer.OnWindowOptimized(window);
+  // It leaves with a single good residual: min_good_residuals drops it, so no label may be left there.
+  Marginalize(&writer, 0, Eigen::Isometry3d::Identity(), {Point(0, 20, 10, 0.1, 1)});
+  writer.OnFinished();
+  ASSERT_TRUE(seen.count(0));
+  EXPECT_EQ(seen[0].at<float>(10, 20), 0.0f);
+  EXPECT_NEAR(seen[0].at<float>(5, 5), 100 * 0.5 * 0.5, 1e-4);  // the never-activated candidate stays
+}
+
 TEST(LabelWriter, StereoEnergyFarAboveTheKeyframesMedianIsNotALabel) {
   // Keyframe 0's points, marginalised in two batches (points leaving the view early, then the
   // rest with the keyframe): five with static stereo energies 100-140 and one at 400 (a pattern

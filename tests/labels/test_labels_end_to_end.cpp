@@ -69,8 +69,13 @@ TEST(LabelsEndToEnd, EveryFrameLabelledAndAccurateThenResumes) {
   EXPECT_TRUE(fs::exists(out + "/labels_summary.json"));
   EXPECT_TRUE(fs::exists(out + "/odometry/trajectory.txt"));
 
-  // Resume: all files exist, nothing is recomputed, the summary is the same.
+  // Resume: all files exist, nothing is recomputed, the summary is the same; the temporary files a
+  // killed run leaves (WriteAtomically) are removed.
+  std::ofstream(JoinPath(out, "000004.tmp-writing.png")) << "half a PNG";
+  std::ofstream(JoinPath(out, "right/000004.tmp-writing.png")) << "half a PNG";
   const labels::LabelRunSummary second = labels::RunLabelExtraction(seq, out, options);
+  EXPECT_FALSE(fs::exists(JoinPath(out, "000004.tmp-writing.png")));
+  EXPECT_FALSE(fs::exists(JoinPath(out, "right/000004.tmp-writing.png")));
   EXPECT_TRUE(second.skipped_complete);
   EXPECT_EQ(second.statistics.compared(), first.statistics.compared());
   EXPECT_NEAR(second.statistics.share_within_1px(), first.statistics.share_within_1px(), 0.01);
