@@ -4,6 +4,7 @@
 // ATE and ms/frame per row. tb uses --tuned-baseline, else the model's tuned
 // baseline (`dvso tune-baseline --write-model`), else a grid search on this
 // very sequence (said in the output: the paper tunes on training sequences).
+// --tune-values is validated even when no search runs, so a typo is never ignored.
 #include <iostream>
 
 #include "core/error.h"
@@ -24,6 +25,8 @@ struct AblationArgs {
 void Run(const AblationArgs& args) {
   const ExperimentSetup setup = OpenExperiment(args.experiment);
   const double default_bv = setup.default_virtual_baseline;
+  // Before any run, and whether or not the search below is needed.
+  const std::vector<double> tune_grid = BaselineGrid(args.tune_values, default_bv, "--tune-values");
   const std::string& out = args.experiment.out;
   std::ostream& log = args.experiment.json ? std::cerr : std::cout;
   const ExperimentSequence& sequence = setup.sequences.front();
@@ -37,10 +40,10 @@ void Run(const AblationArgs& args) {
     tuned_how = "the model's, tuned on " + setup.predictions.metadata.tuned_on;
   }
   if (!(tuned > 0)) {
-    tuned = TuneVirtualBaseline(setup, BaselineGrid(args.tune_values, default_bv), args.experiment.count,
-                                JoinPath(out, "tune"), !args.experiment.json)
-                .best;
-    tuned_how = "grid search on this sequence";
+    const BaselineSearch search =
+        TuneVirtualBaseline(setup, tune_grid, args.experiment.count, JoinPath(out, "tune"), !args.experiment.json);
+    tuned = search.best;
+    tuned_how = std::string("grid search on this sequence, lowest ") + TuningMetricName(search.metric);
   }
   log << "virtual baseline: default " << default_bv << " m, tuned " << tuned << " m (" << tuned_how << ")\n";
 

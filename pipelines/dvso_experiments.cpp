@@ -2,8 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <iomanip>
+#include <limits>
+#include <map>
 #include <sstream>
 
 #include "core/error.h"
@@ -14,10 +15,72 @@
 
 namespace dvso::cli {
 
+namespace {
+
+// b_v labels (BaselineRunLabel): 6 digits tell values 1 micrometre apart at 0.5 m, finer than any
+// b_v a grid search can resolve, yet print a grid's 0.5004000000000001 as 0.5004.
+constexpr int kRunLabelSignificantDigits = 6;
+
+// Throws when two values of a grid would get one run name (and one folder: the second run would
+// overwrite the first).
+void RequireDistinctRunLabels(const std::vector<double>& values, const std::string& grid) {
+  std::map<std::string, double> value_of_label;
+  for (const double value : values) {
+    const std::string label = BaselineRunLabel(value);
+    const auto [earlier, inserted] = value_of_label.emplace(label, value);
+    if (inserted) continue;
+    std::ostringstream both;
+    both << std::setprecision(std::numeric_limits<double>::max_digits10) << earlier->second << " and " << value;
+    throw Error(grid + ": b_v " + both.str() + " share the run name " + label + " (" +
+                std::to_string(kRunLabelSignificantDigits) + " significant digits): use a coarser step");
+  }
+}
+
+// TuningMetric: t_rel only when every sequence's GT over the evaluated frames holds a KITTI segment
+// (this depends on the GT path alone, not on b_v, so it is decided once before the runs).
+TuningMetric ChooseTuningMetric(const ExperimentSetup& setup, int count) {
+  for (const ExperimentSequence& s : setup.sequences) {
+    const int frames = count < 0 ? s.reader->size() : std::min(count, s.reader->size());
+    std::vector<Eigen::Isometry3d> path;
+    for (int i = 0; i < frames && i < static_cast<int>(s.gt.size()); ++i) path.push_back(s.gt.poses[i].T_world_camera);
+    // The GT against itself: the segments the evaluation would find with every estimated pose present.
+    OdometryMetrics metrics;
+    ComputeKittiSegmentErrors(path, path, std::vector<bool>(path.size(), true), OdometryEvalOptions{}, &metrics);
+    if (metrics.segments == 0) return TuningMetric::kAte;
+  }
+  return TuningMetric::kTRel;
+}
+
+}  // namespace
+
 nlohmann::json VariantResult::ToJson() const {
-  return {{"name", name},           {"t_rel", t_rel},   {"r_rel", r_rel},      {"sim3_scale", sim3_scale},
-          {"ate_rmse", ate_rmse},   {"ms_per_frame", ms_per_frame},           {"lost", lost},
-          {"resets", resets},       {"aligned", aligned},   {"segments", segments}};
+  // Without segments t_rel / r_rel are undefined: null, not a misleading 0.
+  const nlohmann::json t_rel_json = segments > 0 ? nlohmann::json(t_rel) : nlohmann::json(nullptr);
+  const nlohmann::json r_rel_json = segments > 0 ? nlohmann::json(r_rel) : nlohmann::json(nullptr);
+  return {{"name", name},           {"t_rel", t_rel_json},   {"r_rel", r_rel_json}, {"sim3_scale", sim3_scale},
+          {"ate_rmse", ate_rmse},   {"ms_per_frame", ms_per_frame},                 {"lost", lost},
+          {"resets", resets},       {"aligned", aligned},    {"segments", segments}};
+}
+
+const char* TuningMetricName(TuningMetric metric) {
+  return metric == TuningMetric::kTRel ? "t_rel_percent" : "ate_m";
+}
+
+std::string DescribeTuningMetric(TuningMetric metric) {
+  return metric == TuningMetric::kTRel
+             ? "error minimised: t_rel % (every sequence has KITTI segments)"
+             : "error minimised: ATE m on every sequence (a GT path is shorter than a 100 m KITTI segment)";
+}
+
+double TuningError(const VariantResult& run, TuningMetric metric) {
+  if (metric == TuningMetric::kAte) return run.ate_rmse;
+  return run.segments > 0 ? run.t_rel : std::numeric_limits<double>::infinity();
+}
+
+std::string BaselineRunLabel(double virtual_baseline) {
+  std::ostringstream label;
+  label << std::setprecision(kRunLabelSignificantDigits) << virtual_baseline;
+  return label.str();
 }
 
 VariantResult RunVariant(const std::string& name, const SequenceReader& sequence, const Trajectory& gt,
@@ -113,8 +176,10 @@ ExperimentSetup OpenExperiment(const ExperimentArgs& args) {
 
 BaselineSearch TuneVirtualBaseline(const ExperimentSetup& setup, const std::vector<double>& values, int count,
                                    const std::string& out_dir, bool progress) {
+  RequireDistinctRunLabels(values, "the b_v grid");
   BaselineSearch search;
   search.values = values;
+  search.metric = ChooseTuningMetric(setup, count);
   const size_t n = setup.sequences.size();
   std::unique_ptr<ProgressBar> bar;
   if (progress) bar = std::make_unique<ProgressBar>("tune-baseline", static_cast<long>(values.size() * n));
@@ -122,17 +187,16 @@ BaselineSearch TuneVirtualBaseline(const ExperimentSetup& setup, const std::vect
   for (const double b : values) {
     vo::OdometryOptions options = setup.options;
     options.dvso.virtual_baseline = b;
-    std::ostringstream name;
-    name << std::fixed << std::setprecision(3) << b;
+    const std::string label = BaselineRunLabel(b);
     double sum = 0;
     bool lost = false;
     for (size_t k = 0; k < n; ++k) {
       const ExperimentSequence& s = setup.sequences[k];
-      const std::string run_name = "b_v=" + name.str() + (n > 1 ? " #" + std::to_string(k + 1) : "");
-      const std::string dir = JoinPath(out_dir, "bv_" + name.str() + (n > 1 ? "_" + std::to_string(k + 1) : ""));
+      const std::string run_name = "b_v=" + label + (n > 1 ? " #" + std::to_string(k + 1) : "");
+      const std::string dir = JoinPath(out_dir, "bv_" + label + (n > 1 ? "_" + std::to_string(k + 1) : ""));
       search.runs.push_back(RunVariant(run_name, *s.reader, s.gt, vo::OdometryMode::kDvso, options,
                                        setup.predictions.source.get(), count, dir));
-      sum += search.runs.back().TuningError();
+      sum += TuningError(search.runs.back(), search.metric);
       lost = lost || search.runs.back().lost > 0;
       if (bar) bar->Update(static_cast<long>(search.runs.size()), run_name);
     }
@@ -148,7 +212,7 @@ BaselineSearch TuneVirtualBaseline(const ExperimentSetup& setup, const std::vect
   return search;
 }
 
-std::vector<double> ParseRange(const std::string& text) {
+std::vector<double> ParseRange(const std::string& text, const std::string& option) {
   std::vector<double> parts;
   std::stringstream in(text);
   for (std::string item; std::getline(in, item, ':');) {
@@ -157,16 +221,16 @@ std::vector<double> ParseRange(const std::string& text) {
       parts.push_back(std::stod(item, &used));
       Require(used == item.size(), "");
     } catch (const std::exception&) {
-      throw Error("--values '" + text + "': expected start:step:end (metres), e.g. 0.3:0.05:0.8");
+      throw Error(option + " '" + text + "': expected start:step:end (metres), e.g. 0.3:0.05:0.8");
     }
   }
   Require(parts.size() == 3 && parts[1] > 0 && parts[0] > 0 && parts[2] >= parts[0],
-          "--values '" + text + "': expected start:step:end with 0 < start <= end and step > 0");
+          option + " '" + text + "': expected start:step:end with 0 < start <= end and step > 0");
   std::vector<double> values;
   // Each value is a whole odometry run: a grid of more than this is a typo (e.g. a step of 1e-9), not a plan.
   constexpr double kMaxGridValues = 200;
   const double count = std::floor((parts[2] - parts[0]) / parts[1] + 1e-9) + 1;
-  Require(count <= kMaxGridValues, "--values '" + text + "': " + std::to_string(static_cast<long long>(count)) +
+  Require(count <= kMaxGridValues, option + " '" + text + "': " + std::to_string(static_cast<long long>(count)) +
                                        " values, more than the " + std::to_string(static_cast<int>(kMaxGridValues)) +
                                        " odometry runs a grid search may take");
   const int n = static_cast<int>(count);
@@ -174,12 +238,16 @@ std::vector<double> ParseRange(const std::string& text) {
   return values;
 }
 
-std::vector<double> BaselineGrid(const std::string& text, double default_baseline) {
-  if (!text.empty()) return ParseRange(text);
-  constexpr int kStepsEachSide = 4;         // +-20 %
-  constexpr double kRelativeStep = 0.05;
+std::vector<double> BaselineGrid(const std::string& text, double default_baseline, const std::string& option) {
   std::vector<double> grid;
-  for (int k = -kStepsEachSide; k <= kStepsEachSide; ++k) grid.push_back(default_baseline * (1.0 + kRelativeStep * k));
+  if (!text.empty()) {
+    grid = ParseRange(text, option);
+  } else {
+    constexpr int kStepsEachSide = 4;  // +-20 %
+    constexpr double kRelativeStep = 0.05;
+    for (int k = -kStepsEachSide; k <= kStepsEachSide; ++k) grid.push_back(default_baseline * (1.0 + kRelativeStep * k));
+  }
+  RequireDistinctRunLabels(grid, text.empty() ? "the default " + option + " grid" : option + " '" + text + "'");
   return grid;
 }
 
@@ -189,13 +257,21 @@ std::string FormatVariantTable(const std::vector<VariantResult>& results) {
       << "r_rel deg/100m" << std::setw(12) << "Sim3 scale" << std::setw(11) << "ATE m" << std::setw(11)
       << "ms/frame" << std::setw(6) << "lost" << "\n";
   out << std::fixed;
+  bool any_without_segments = false;
   for (const VariantResult& r : results) {
-    out << std::left << std::setw(14) << (r.name + (r.aligned ? "*" : "")) << std::right << std::setprecision(3)
-        << std::setw(10) << r.t_rel << std::setw(16) << r.r_rel << std::setprecision(4) << std::setw(12)
-        << r.sim3_scale << std::setprecision(3) << std::setw(11) << r.ate_rmse << std::setprecision(1)
-        << std::setw(11) << r.ms_per_frame << std::setw(6) << r.lost << "\n";
+    out << std::left << std::setw(14) << (r.name + (r.aligned ? "*" : "")) << std::right << std::setprecision(3);
+    // t_rel / r_rel are undefined without a KITTI segment: a 0.000 there would read as a perfect run.
+    if (r.segments > 0) {
+      out << std::setw(10) << r.t_rel << std::setw(16) << r.r_rel;
+    } else {
+      out << std::setw(10) << "-" << std::setw(16) << "-";
+      any_without_segments = true;
+    }
+    out << std::setprecision(4) << std::setw(12) << r.sim3_scale << std::setprecision(3) << std::setw(11)
+        << r.ate_rmse << std::setprecision(1) << std::setw(11) << r.ms_per_frame << std::setw(6) << r.lost << "\n";
   }
   out << "(* after Sim(3) alignment; every other row is unaligned, KITTI protocol)\n";
+  if (any_without_segments) out << "(- : the GT path is shorter than a 100 m KITTI segment)\n";
   return out.str();
 }
 

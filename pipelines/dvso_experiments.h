@@ -28,10 +28,20 @@ struct VariantResult {
   int resets = 0;
   bool aligned = false;     // metrics after Sim(3) alignment (mono)
   int segments = 0;         // KITTI segments evaluated (0: path shorter than 100 m, t_rel / r_rel undefined)
-  // What tune-baseline minimises: t_rel, or the ATE when the path is too short for KITTI segments.
-  double TuningError() const { return segments > 0 ? t_rel : ate_rmse; }
+  // t_rel / r_rel are null when segments == 0 (undefined, not zero).
   nlohmann::json ToJson() const;
 };
+
+// What tune-baseline minimises. One metric for the whole search, so that the mean over several
+// sequences never adds percent to metres: t_rel when the GT path of every sequence (over the
+// evaluated frames) is long enough for a KITTI segment (100 m), else the ATE on every sequence.
+enum class TuningMetric { kTRel, kAte };
+// "t_rel_percent" | "ate_m": the JSON value of `error_metric`.
+const char* TuningMetricName(TuningMetric metric);
+// One line for the printed output: the metric, its unit and why it was chosen.
+std::string DescribeTuningMetric(TuningMetric metric);
+// A run's error in `metric`; +inf for t_rel when the run evaluated no segment (estimate poses missing).
+double TuningError(const VariantResult& run, TuningMetric metric);
 
 // Runs `mode` with `options` over the first `count` frames (-1 = all) of
 // `sequence`, writing the usual outputs into out_dir, and evaluates against
@@ -81,21 +91,28 @@ ExperimentSetup OpenExperiment(const ExperimentArgs& args);
 struct BaselineSearch {
   std::vector<VariantResult> runs;  // value-major: runs[v * sequences + s]
   std::vector<double> values;
+  TuningMetric metric = TuningMetric::kAte;  // the one error every run is scored by (TuningMetric)
   std::vector<double> mean_error;   // per value: mean TuningError over the sequences (inf if any run lost tracking)
   double best = 0;                  // the value with the lowest mean_error
 };
-// Out_dir gets one folder per run (bv_<value>, or bv_<value>_<k> with several sequences).
+// Out_dir gets one folder per run (bv_<label>, or bv_<label>_<k> with several sequences; label:
+// BaselineRunLabel). Throws before any run when two values share a label.
 BaselineSearch TuneVirtualBaseline(const ExperimentSetup& setup, const std::vector<double>& values, int count,
                                    const std::string& out_dir, bool progress);
 
-// "start:step:end" (inclusive) -> values; throws dvso::Error on bad text.
-std::vector<double> ParseRange(const std::string& text);
+// b_v as run names and folders show it: %g with enough significant digits to keep the values of
+// any sensible grid apart (0.5 and 0.5004), few enough that a grid's rounding (0.5004000000000001)
+// reads as typed.
+std::string BaselineRunLabel(double virtual_baseline);
 
-// The b_v grid of a search: ParseRange(text), or without text nine values
-// +-20 % (steps of 5 %) around `default_baseline`.
-std::vector<double> BaselineGrid(const std::string& text, double default_baseline);
+// "start:step:end" (inclusive) -> values; throws dvso::Error naming `option` (e.g. "--values") on bad text.
+std::vector<double> ParseRange(const std::string& text, const std::string& option);
 
-// Table of results in the paper's Table 3 layout.
+// The b_v grid of a search: ParseRange(text, option), or without text nine values
+// +-20 % (steps of 5 %) around `default_baseline`. Throws when two values would share a run label.
+std::vector<double> BaselineGrid(const std::string& text, double default_baseline, const std::string& option);
+
+// Table of results in the paper's Table 3 layout; t_rel / r_rel read "-" for a row without KITTI segments.
 std::string FormatVariantTable(const std::vector<VariantResult>& results);
 
 }  // namespace dvso::cli

@@ -2,7 +2,7 @@
 // [--post-process] [--device auto|cpu|cuda] [--no-color] [--threads N]`: writes
 // left/NAME.png and right/NAME.png (KITTI uint16, disparity * 256, at the input
 // image resolution) plus colour-mapped previews in left_color/ and right_color/.
-// NAME: the input's file name with --images, %06d with --sequence.
+// NAME: the input's file name with --images, the sequence's frame name with --sequence.
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -19,6 +19,7 @@
 #include "core/fs_util.h"
 #include "core/progress.h"
 #include "core/sequence.h"
+#include "core/sequence_common.h"
 #include "pipelines/commands.h"
 #include "stacknet/predictor.h"
 
@@ -53,13 +54,10 @@ void RunPredict(const PredictArgs& args) {
                                                              : CameraPair::kGrey;
     sequence = OpenSequence(args.sequence, "", pair);
   } else {
-    RequireFile(fs::is_directory(args.images), args.images, "image folder not found");
-    for (const auto& entry : fs::directory_iterator(args.images)) {
-      const std::string ext = entry.path().extension().string();
-      if (ext == ".png" || ext == ".jpg" || ext == ".jpeg") files.push_back(entry.path().string());
-    }
-    std::sort(files.begin(), files.end());
-    RequireFile(!files.empty(), args.images, "no .png/.jpg images");
+    // The sequence readers' own listing, so that `odometry --sequence` over the same images (e.g. a KITTI
+    // image_0/) finds a map for every frame it reads: a rule of predict's own skipped some of them.
+    files = internal::ListImages(args.images);
+    RequireFile(!files.empty(), args.images, "no images (.png/.jpg/.jpeg/.pgm/.bmp, any case)");
     std::set<std::string> stems;
     for (const std::string& f : files)
       RequireFile(stems.insert(fs::path(f).stem().string()).second, f,
@@ -153,7 +151,9 @@ void AddPredictCommand(CLI::App& app) {
   auto args = std::make_shared<PredictArgs>();
   auto* cmd = app.add_subcommand("predict", "Predict left/right disparity maps with an exported model");
   cmd->add_option("--model", args->model, "TorchScript model from `dvso export`")->required()->check(CLI::ExistingFile);
-  cmd->add_option("--images", args->images, "Folder of .png/.jpg images; each output keeps its input's name (as .png)");
+  cmd->add_option("--images", args->images,
+                  "Folder of .png/.jpg/.jpeg/.pgm/.bmp images (any case, as the sequence readers list them); each "
+                  "output keeps its input's name (as .png)");
   cmd->add_option("--sequence", args->sequence,
                   "Sequence folder (KITTI odometry layout / dvso simulate output / KITTI raw drive); outputs are "
                   "named like its frames");

@@ -217,11 +217,20 @@ std::string SaveTraced(StackNet& model, bool use_residual, const NetworkOptions&
 }
 }  // namespace
 
-std::string ExportRandomInit(const NetworkOptions& network, const std::string& model, const std::string& out_path) {
+std::string ExportRandomInit(const NetworkOptions& network, const std::string& out_path, const ExportOptions& options) {
   network.Check();
-  Require(model == "simple" || model == "stack", "random-init export: model must be simple or stack");
+  options.Check();
+  // Half a training camera would make a file that looks usable yet is refused by `odometry --model`.
+  Require((options.training_baseline > 0) == (options.training_fx_over_width > 0),
+          "random-init export: give both --training-baseline and --training-fx-over-width, or neither");
+  ModelMetadata metadata;
+  metadata.baseline = options.training_baseline;
+  metadata.fx_over_width = options.training_fx_over_width;
+  metadata.config_name = options.config_name;
+  // Untrained: "auto" (as trained) has no training to follow, so it is the full network.
+  const bool use_residual = options.model != "simple";
   StackNet net(network);
-  return SaveTraced(net, model == "stack", network, ModelMetadata{}, out_path);
+  return SaveTraced(net, use_residual, network, metadata, out_path);
 }
 
 std::string ExportCheckpoint(const std::string& checkpoint_path, const std::string& out_path,
@@ -232,8 +241,10 @@ std::string ExportCheckpoint(const std::string& checkpoint_path, const std::stri
   const StackNetConfig config = ParseConfig(info.config_yaml, checkpoint_path + " (embedded config)");
   const bool use_residual = options.model == "stack" || (options.model == "auto" && info.trained_model == "stack");
   ModelMetadata metadata;
-  // Checkpoints from before the config name was recorded only know where they were trained.
-  metadata.config_name = info.config_name.empty() ? config.train.output_dir : info.config_name;
+  // A name given wins; checkpoints from before the config name was recorded only know where they were trained.
+  metadata.config_name = !options.config_name.empty() ? options.config_name
+                         : info.config_name.empty()    ? config.train.output_dir
+                                                       : info.config_name;
   metadata.baseline = options.training_baseline;
   metadata.fx_over_width = options.training_fx_over_width;
   if (!metadata.has_camera()) {

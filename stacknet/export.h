@@ -44,6 +44,7 @@ struct ExportOptions {
   std::string model = "auto";  // auto (as trained: stack if ResidualNet was trained) | simple | stack
   double training_baseline = 0;       // training camera baseline (m); 0 = from the config's first readable sequence
   double training_fx_over_width = 0;  // training camera f_x / width; 0 = from the same sequence
+  std::string config_name;            // training config's name; "" = the checkpoint's (random init: none)
   void Check() const;
 };
 
@@ -102,7 +103,11 @@ std::string ExportCheckpoint(const std::string& checkpoint_path, const std::stri
 int LoadWeightsFromExport(const std::string& model_path, StackNet& model);
 
 // Exports a randomly initialised network of the given architecture (latency
-// benchmarks need no trained weights). model: "simple" or "stack".
-std::string ExportRandomInit(const NetworkOptions& network, const std::string& model, const std::string& out_path);
+// benchmarks need no trained weights). options.model: simple or stack (auto =
+// stack). The metadata carries options' training camera and config name as
+// given, nothing from a config's sequences: both camera values or neither (a
+// file with one is refused by the odometry all the same).
+std::string ExportRandomInit(const NetworkOptions& network, const std::string& out_path,
+                             const ExportOptions& options = {});
 
 }  // namespace dvso::stacknet

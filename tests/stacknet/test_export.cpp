@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <torch/script.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -18,6 +19,7 @@
 #include "stacknet/dataset.h"
 #include "stacknet/export.h"
 #include "stacknet_test_util.h"
+#include "tests/dvso_cli_runner.h"
 #include "tests/temp_dir.h"
 
 namespace dvso::stacknet {
@@ -346,6 +348,60 @@ TEST(Export, PredictorRejectsFilesThatAreNotDvsoModelsWithOneLine) {
     EXPECT_NE(std::string(e.what()).find("not 2 float maps"), std::string::npos) << e.what();
   }
   fs::remove_all(dir);
+}
+
+// `dvso export --random-init` of the tiny config (the CLI tests below), writing SimpleNet to `out`.
+std::string ExportTinyRandomInit(const std::string& extra_args, const std::string& out) {
+  return "export --config " + std::string(DVSO_TEST_DATA_DIR) + "/../configs/stacknet_tiny.yaml --random-init " +
+         "--model simple " + extra_args + " --out " + out;
+}
+
+// The training camera (and config name) given to `export --random-init` reach the file's metadata, so that
+// `odometry --model` accepts it; half a camera is refused rather than written.
+TEST(ExportCli, RandomInitRecordsTheGivenTrainingCamera) {
+  const fs::path dir = fs::path(dvso::testing::ScratchDir("export_cli_random"));
+  const std::string model = (dir / "m.pt").string();
+  const dvso::testing::CliRun run = dvso::testing::RunDvso(ExportTinyRandomInit(
+      "--training-baseline 0.54 --training-fx-over-width 0.58 --config-name tiny_architecture", model));
+  ASSERT_EQ(run.exit_code, 0) << run.out;
+  const ModelMetadata metadata = ReadModelMetadata(model);
+  EXPECT_DOUBLE_EQ(metadata.baseline, 0.54);
+  EXPECT_DOUBLE_EQ(metadata.fx_over_width, 0.58);
+  EXPECT_EQ(metadata.config_name, "tiny_architecture");
+  EXPECT_EQ(metadata.model_kind, "simple");
+  const std::string half = (dir / "half.pt").string();
+  const dvso::testing::CliRun refused = dvso::testing::RunDvso(ExportTinyRandomInit("--training-baseline 0.54", half));
+  EXPECT_EQ(refused.exit_code, 1) << refused.out;
+  EXPECT_EQ(std::count(refused.out.begin(), refused.out.end(), '\n'), 1) << "not one line: " << refused.out;
+  EXPECT_FALSE(fs::exists(half));
+}
+
+// A metadata option that a mode of `dvso export` cannot record is a one-line usage error, never dropped.
+TEST(ExportCli, MetadataOptionsAModeWouldDropAreErrors) {
+  const fs::path dir = fs::path(dvso::testing::ScratchDir("export_cli_dropped"));
+  const std::string base = (dir / "base.pt").string(), out = (dir / "out.pt").string();
+  ASSERT_EQ(dvso::testing::RunDvso(
+                ExportTinyRandomInit("--training-baseline 0.54 --training-fx-over-width 0.58", base)).exit_code,
+            0);
+  const std::string stamp = "export --stamp " + base + " --out " + out + " ";
+  auto expect_usage_error = [&](const std::string& args, const std::string& named_option) {
+    const dvso::testing::CliRun run = dvso::testing::RunDvso(args);
+    EXPECT_EQ(run.exit_code, 1) << args << "\n" << run.out;
+    EXPECT_NE(run.out.find(named_option), std::string::npos) << args << "\n" << run.out;
+    EXPECT_EQ(std::count(run.out.begin(), run.out.end(), '\n'), 1) << "not one line: " << run.out;
+    EXPECT_FALSE(fs::exists(out)) << args;
+  };
+  expect_usage_error(stamp + "--tuned-on 00", "--tuned-on");
+  expect_usage_error(stamp + "--tuned-on 00 --tuned-baseline 0", "--tuned-on");
+  expect_usage_error(stamp + "--model stack", "--model");
+  expect_usage_error(ExportTinyRandomInit("--tuned-baseline 0.6", out), "--tuned-baseline");
+  // Given together, both are stamped (and the camera is kept).
+  const dvso::testing::CliRun run = dvso::testing::RunDvso(stamp + "--tuned-baseline 0.6 --tuned-on 00");
+  ASSERT_EQ(run.exit_code, 0) << run.out;
+  const ModelMetadata metadata = ReadModelMetadata(out);
+  EXPECT_DOUBLE_EQ(metadata.tuned_baseline, 0.6);
+  EXPECT_EQ(metadata.tuned_on, "00");
+  EXPECT_DOUBLE_EQ(metadata.baseline, 0.54);
 }
 
 }  // namespace

@@ -5,6 +5,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <string>
@@ -69,6 +70,22 @@ TEST_F(PredictCli, BenchDefaultsToTheModelsInputSize) {
   const dvso::testing::CliRun given = dvso::testing::RunDvso(bench + " --width 128 --height 64", /*merge_stderr=*/false);
   ASSERT_EQ(given.exit_code, 0);
   EXPECT_NE(given.out.find("\"width\": 128"), std::string::npos) << given.out;
+}
+
+// The images of a folder are those the sequence readers list (any case; .pgm/.bmp too), so that
+// `odometry --sequence` over them finds a map for every frame.
+TEST_F(PredictCli, ImagesAreListedLikeTheSequenceReadersListThem) {
+  WriteImage("a.png", 64, 32);
+  WriteImage("b.png", 64, 32);
+  fs::rename(dir_ / "images" / "b.png", dir_ / "images" / "b.PNG");  // the encoder is chosen by extension
+  WriteImage("c.bmp", 64, 32);
+  ASSERT_EQ(Predict("--no-color"), 0);
+  for (const char* sub : {"left", "right"}) {
+    for (const char* name : {"a.png", "b.png", "c.png"})
+      EXPECT_TRUE(fs::exists(dir_ / "out" / sub / name)) << sub << "/" << name;
+    const fs::directory_iterator maps(dir_ / "out" / sub);
+    EXPECT_EQ(std::distance(fs::begin(maps), fs::end(maps)), 3) << sub << ": other maps than the inputs'";
+  }
 }
 
 TEST_F(PredictCli, TwoImagesWithTheSameNameAreAnError) {

@@ -13,6 +13,8 @@
 #include <fstream>
 #include <limits>
 #include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
 
 #include "core/disparity_conversion.h"
 #include "core/error.h"
@@ -396,6 +398,159 @@ TEST(DvsoCli, AblationAndTuneBaselinePrintEveryRow) {
   EXPECT_NE(unpaired.out.find("one --gt per --sequence"), std::string::npos) << unpaired.out;
   EXPECT_NE(dvso::testing::RunDvso("ablation --out " + dir + "/abl2" + common + " --sequence " + seq + " --gt " + seq +
                                    "/poses.txt").exit_code, 0);  // the ablation table is per sequence
+}
+
+// Frames of the sequences the tests below simulate: a few, enough for the odometry to start.
+constexpr int kShortCliFrames = 8;
+
+// --sequence / --gt / disparity files of a simulated sequence, fast preset.
+std::string FilesExperimentArgs(const std::string& seq, const std::string& gt) {
+  return " --sequence " + seq + " --gt " + gt + " --disparity-left " + seq + "/disp_0 --disparity-right " + seq +
+         "/disp_1 --preset fast";
+}
+
+// The sequence's GT with every position scaled about the origin, written to `path`: the same images, but a
+// GT path long enough for a KITTI segment (only the evaluation reads the GT, never the odometry).
+void WriteStretchedGt(const std::string& seq, const std::string& path) {
+  constexpr double kStretch = 20;  // kShortCliFrames frames of ~1 m -> ~140 m, over the shortest segment (100 m)
+  Trajectory gt = ReadTrajectory(seq + "/poses.txt", TrajectoryFormat::kKitti);
+  for (StampedPose& pose : gt.poses) pose.T_world_camera.translation() *= kStretch;
+  WriteKittiTrajectory(path, gt);
+}
+
+// Whether `out_dir` holds a run folder of tune-baseline (bv_*).
+bool HasBaselineRunFolder(const std::string& out_dir) {
+  if (!std::filesystem::is_directory(out_dir)) return false;
+  for (const auto& entry : std::filesystem::directory_iterator(out_dir)) {
+    if (entry.path().filename().string().rfind("bv_", 0) == 0) return true;
+  }
+  return false;
+}
+
+TEST(DvsoCli, TuneBaselineNamesItsMetricAndScoresByTRelOnlyWithSegments) {
+  const std::string dir = dvso::testing::FreshSimulatedSequence("dvso_tune_metric", kShortCliFrames);
+  ASSERT_FALSE(dir.empty());
+  const std::string seq = dir + "/seq";
+  const std::string one_value = "tune-baseline --json --values 0.54:0.1:0.54";
+  // A path of ~7 m has no KITTI segment: the ATE is the error, t_rel / r_rel are null, not 0.
+  const auto short_run = dvso::testing::RunDvso(one_value + " --out " + dir + "/short" +
+                                                FilesExperimentArgs(seq, seq + "/poses.txt"), /*merge_stderr=*/false);
+  ASSERT_EQ(short_run.exit_code, 0) << short_run.out;
+  const nlohmann::json s = nlohmann::json::parse(short_run.out);
+  EXPECT_EQ(s.value("error_metric", std::string()), "ate_m");
+  EXPECT_EQ(s["runs"][0]["segments"].get<int>(), 0);
+  EXPECT_TRUE(s["runs"][0]["t_rel"].is_null());
+  EXPECT_TRUE(s["runs"][0]["r_rel"].is_null());
+  EXPECT_DOUBLE_EQ(s["mean_error"][0]["mean_error"].get<double>(), s["runs"][0]["ate_rmse"].get<double>());
+  // The same images against a GT path over 100 m: t_rel.
+  WriteStretchedGt(seq, dir + "/long_gt.txt");
+  const auto long_run = dvso::testing::RunDvso(one_value + " --out " + dir + "/long" +
+                                               FilesExperimentArgs(seq, dir + "/long_gt.txt"), /*merge_stderr=*/false);
+  ASSERT_EQ(long_run.exit_code, 0) << long_run.out;
+  const nlohmann::json l = nlohmann::json::parse(long_run.out);
+  EXPECT_EQ(l.value("error_metric", std::string()), "t_rel_percent");
+  EXPECT_GT(l["runs"][0]["segments"].get<int>(), 0);
+  EXPECT_DOUBLE_EQ(l["mean_error"][0]["mean_error"].get<double>(), l["runs"][0]["t_rel"].get<double>());
+}
+
+TEST(DvsoCli, TuneBaselineScoresEverySequenceByAteWhenOneIsTooShortForSegments) {
+  // Several sequences need a model (disparity files belong to one sequence), so LibTorch: its builds have `export`.
+  if (dvso::testing::RunDvso("export --help").exit_code != 0) GTEST_SKIP() << "build without LibTorch";
+  const std::string model = std::string(DVSO_TEST_DATA_DIR) + "/../models/stacknet_cpu_main.pt";
+  ASSERT_TRUE(std::filesystem::exists(model));
+  const std::string dir = dvso::testing::FreshSimulatedSequence("dvso_tune_mixed", kShortCliFrames);
+  ASSERT_FALSE(dir.empty());
+  const std::string seq = dir + "/seq";
+  WriteStretchedGt(seq, dir + "/long_gt.txt");
+  const auto run = dvso::testing::RunDvso("tune-baseline --json --values 0.54:0.1:0.54 --preset fast --model " +
+                                              model + " --sequence " + seq + " --gt " + dir + "/long_gt.txt" +
+                                              " --sequence " + seq + " --gt " + seq + "/poses.txt --out " + dir +
+                                              "/mixed",
+                                          /*merge_stderr=*/false);
+  ASSERT_EQ(run.exit_code, 0) << run.out;
+  const nlohmann::json j = nlohmann::json::parse(run.out);
+  EXPECT_EQ(j.value("error_metric", std::string()), "ate_m");
+  ASSERT_EQ(j["runs"].size(), 2u);
+  EXPECT_GT(j["runs"][0]["segments"].get<int>(), 0);  // t_rel exists there, yet the search does not mix units
+  EXPECT_EQ(j["runs"][1]["segments"].get<int>(), 0);
+  const double mean_ate = 0.5 * (j["runs"][0]["ate_rmse"].get<double>() + j["runs"][1]["ate_rmse"].get<double>());
+  EXPECT_NEAR(j["mean_error"][0]["mean_error"].get<double>(), mean_ate, 1e-12);
+}
+
+TEST(DvsoCli, TuneBaselineChecksWriteModelBeforeAnyRun) {
+  const std::string dir = dvso::testing::FreshSimulatedSequence("dvso_tune_write_model", kShortCliFrames);
+  ASSERT_FALSE(dir.empty());
+  const std::string seq = dir + "/seq";
+  const auto files = dvso::testing::RunDvso("tune-baseline --values 0.5:0.04:0.58 --write-model " + dir +
+                                            "/tuned.pt --out " + dir + "/files" +
+                                            FilesExperimentArgs(seq, seq + "/poses.txt"));
+  EXPECT_NE(files.exit_code, 0);
+  EXPECT_NE(files.out.find("--write-model"), std::string::npos) << files.out;
+  EXPECT_FALSE(HasBaselineRunFolder(dir + "/files"));
+  // A missing output folder is refused before the model is even opened (so in builds without LibTorch too).
+  const std::string model = std::string(DVSO_TEST_DATA_DIR) + "/../models/stacknet_cpu_main.pt";
+  const auto no_folder = dvso::testing::RunDvso("tune-baseline --values 0.5:0.04:0.58 --preset fast --model " + model +
+                                                " --write-model " + dir + "/absent/tuned.pt --sequence " + seq +
+                                                " --gt " + seq + "/poses.txt --out " + dir + "/no_folder");
+  EXPECT_NE(no_folder.exit_code, 0);
+  EXPECT_NE(no_folder.out.find(dir + "/absent"), std::string::npos) << no_folder.out;
+  EXPECT_FALSE(HasBaselineRunFolder(dir + "/no_folder"));
+}
+
+TEST(DvsoCli, TablesPrintADashForTRelWithoutSegments) {
+  const std::string dir = dvso::testing::FreshSimulatedSequence("dvso_table_dash", kShortCliFrames);
+  ASSERT_FALSE(dir.empty());
+  const std::string seq = dir + "/seq";
+  const auto run = dvso::testing::RunDvso("tune-baseline --values 0.54:0.1:0.54 --out " + dir + "/table" +
+                                              FilesExperimentArgs(seq, seq + "/poses.txt"),
+                                          /*merge_stderr=*/false);  // the progress bar stays out of the table
+  ASSERT_EQ(run.exit_code, 0) << run.out;
+  EXPECT_NE(run.out.find("error minimised: ATE m"), std::string::npos) << run.out;
+  const size_t row = run.out.find("\nb_v=");  // the one run's row
+  ASSERT_NE(row, std::string::npos) << run.out;
+  std::istringstream cells(run.out.substr(row + 1, run.out.find('\n', row + 1) - row - 1));
+  std::string name, t_rel, r_rel;
+  cells >> name >> t_rel >> r_rel;
+  EXPECT_EQ(t_rel, "-") << run.out;
+  EXPECT_EQ(r_rel, "-") << run.out;
+}
+
+TEST(DvsoCli, TuneBaselineRunNamesKeepCloseValuesApart) {
+  const std::string dir = dvso::testing::FreshSimulatedSequence("dvso_tune_names", kShortCliFrames);
+  ASSERT_FALSE(dir.empty());
+  const std::string seq = dir + "/seq";
+  const std::string files = FilesExperimentArgs(seq, seq + "/poses.txt");
+  const auto run = dvso::testing::RunDvso("tune-baseline --json --values 0.5:0.0004:0.5008 --out " + dir + "/close" +
+                                              files, /*merge_stderr=*/false);
+  ASSERT_EQ(run.exit_code, 0) << run.out;
+  const nlohmann::json j = nlohmann::json::parse(run.out);
+  ASSERT_EQ(j["runs"].size(), 3u);
+  const char* names[] = {"0.5", "0.5004", "0.5008"};
+  for (int v = 0; v < 3; ++v) {
+    EXPECT_EQ(j["runs"][v]["name"], std::string("b_v=") + names[v]);
+    EXPECT_TRUE(std::filesystem::exists(dir + "/close/bv_" + names[v] + "/trajectory.txt")) << names[v];
+  }
+  // Values no run name tells apart are refused before any run.
+  const auto colliding = dvso::testing::RunDvso("tune-baseline --values 0.5:0.0000001:0.5000002 --out " + dir +
+                                                "/colliding" + files);
+  EXPECT_NE(colliding.exit_code, 0);
+  EXPECT_NE(colliding.out.find("share the run name"), std::string::npos) << colliding.out;
+  EXPECT_FALSE(HasBaselineRunFolder(dir + "/colliding"));
+}
+
+TEST(DvsoCli, AblationRejectsMalformedTuneValuesEvenWithATunedBaseline) {
+  const std::string dir = dvso::testing::FreshSimulatedSequence("dvso_ablation_tune_values", kShortCliFrames);
+  ASSERT_FALSE(dir.empty());
+  const std::string seq = dir + "/seq";
+  const std::string files = FilesExperimentArgs(seq, seq + "/poses.txt");
+  for (const std::string values : {"0.6:0.1:0.3", "abc"}) {
+    const auto run = dvso::testing::RunDvso("ablation --tuned-baseline 0.55 --tune-values " + values + " --out " +
+                                            dir + "/abl" + files);
+    EXPECT_NE(run.exit_code, 0) << values;
+    // The option the user typed, not tune-baseline's --values.
+    EXPECT_NE(run.out.find("--tune-values '" + values + "'"), std::string::npos) << run.out;
+    EXPECT_FALSE(std::filesystem::exists(dir + "/abl/mono")) << values;
+  }
 }
 
 }  // namespace
