@@ -244,11 +244,23 @@ std::unique_ptr<SequenceReader> OpenImageFolder(const std::string& path, const s
 std::unique_ptr<SequenceReader> OpenSequence(const std::string& path, const std::string& camera_file,
                                              CameraPair pair) {
   RequireFile(fs::is_directory(path), path, "sequence directory does not exist");
-  if (IsKittiRawDrive(path)) return OpenKittiRawSequence(path, pair);
-  if (fs::is_regular_file(JoinPath(path, "calib.txt"))) return OpenKittiSequence(path, pair);
+  // Layouts with their own calibration: a camera file given for them would be silently ignored.
+  const auto require_no_camera_file = [&](const char* layout) {
+    RequireFile(camera_file.empty(), path,
+                std::string("is a ") + layout + " with its own calibration: --camera FILE is for image folders only");
+  };
+  if (IsKittiRawDrive(path)) {
+    require_no_camera_file("KITTI raw drive");
+    return OpenKittiRawSequence(path, pair);
+  }
+  if (fs::is_regular_file(JoinPath(path, "calib.txt"))) {
+    require_no_camera_file("KITTI odometry sequence");
+    return OpenKittiSequence(path, pair);
+  }
   RequireFile(pair == CameraPair::kGrey, path,
               "--cameras colour needs a KITTI layout (image_2/ image_3/ of an odometry folder, image_02/ image_03/ of a raw drive)");
   if (fs::is_directory(JoinPath(path, "mav0")) || fs::is_regular_file(JoinPath(path, "cam0/data.csv"))) {
+    require_no_camera_file("EuRoC sequence");
     return OpenEurocSequence(path);
   }
   if (!camera_file.empty()) return OpenImageFolder(path, camera_file);

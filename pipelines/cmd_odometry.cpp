@@ -23,6 +23,7 @@ struct OdometryArgs {
   bool ply = false;
   bool no_progress = false;
   bool strict = false;
+  bool inference_threads_given = false;  // --inference-threads on the command line
   PredictionSourceArgs predictions;
 };
 
@@ -31,6 +32,10 @@ void Run(const OdometryArgs& args) {
   vo::OdometryOptions options = vo::OdometryOptions::Preset(args.preset);
   if (!args.config.empty()) options = vo::LoadOdometryOptions(args.config, options);
   options.Check();
+  Require(vo::CapabilitiesOf(mode).has_predictions ||
+              (args.predictions.model.empty() && args.predictions.disparity_left.empty() &&
+               args.predictions.disparity_right.empty()),
+          "--model / --disparity-left/right need --mode dvso");
   const std::unique_ptr<SequenceReader> sequence =
       OpenSequence(args.sequence, args.camera_file, ParseCameraPair(args.cameras));
   const StereoCamera& cam = sequence->camera();
@@ -39,11 +44,10 @@ void Run(const OdometryArgs& args) {
     predictions = OpenPredictionSource(args.predictions, *sequence);
     ApplyPredictionSource(args.predictions, &predictions, &options);
   } else {
-    Require(args.predictions.model.empty() && args.predictions.disparity_left.empty(),
-            "--model / --disparity-left/right need --mode dvso");
     // Not an error: scripts pass one set of extra options to every mode (benchmarks/run_dvso.sh).
-    if (args.predictions.virtual_baseline > 0 || !args.predictions.schedule.empty()) {
-      std::cerr << "dvso: note: --virtual-baseline / --prediction-schedule only act in --mode dvso; ignored\n";
+    if (args.predictions.virtual_baseline > 0 || !args.predictions.schedule.empty() || args.inference_threads_given) {
+      std::cerr << "dvso: note: --virtual-baseline / --prediction-schedule / --inference-threads only act in --mode "
+                   "dvso; ignored\n";
     }
   }
   std::cout << "dvso odometry: " << args.sequence << " (" << sequence->size() << " frames, " << cam.left.width << "x"
@@ -112,7 +116,10 @@ void AddOdometryCommand(CLI::App& app) {
   cmd->add_flag("--no-progress", args->no_progress, "No progress bar");
   cmd->add_flag("--strict", args->strict,
                 "Stop at the first unreadable image (default: warn, count it as a lost frame, go on)");
-  cmd->callback([args] { Run(*args); });
+  cmd->callback([args, cmd] {
+    args->inference_threads_given = cmd->count("--inference-threads") > 0;
+    Run(*args);
+  });
 }
 
 }  // namespace dvso::cli

@@ -69,6 +69,23 @@ TEST(Cli, OutOfRangeCameraValuesAreRejectedNotIgnored) {
   }
 }
 
+// Options a layout or mode would silently ignore are errors: a camera file for a sequence with its
+// own calibration, a right disparity folder outside dvso mode.
+TEST(Cli, CameraFileForACalibratedLayoutAndPredictionsOutsideDvsoAreErrors) {
+  const std::string dir = TempDir("ignored_options");
+  std::ofstream(dir + "/calib.txt") << "P0: 700 0 300 0 0 700 100 0 0 0 1 0\nP1: 700 0 300 -350 0 700 100 0 0 0 1 0\n";
+  std::ofstream(dir + "/camera.txt") << "Pinhole 700 700 300 100 0\n640 200\ncrop\n640 200\n";
+  const CliRun camera = RunDvso("odometry --mode mono --sequence " + dir + " --camera " + dir + "/camera.txt --out " +
+                                dir + "/o");
+  EXPECT_EQ(camera.exit_code, 1) << camera.out;
+  EXPECT_NE(camera.out.find("--camera FILE is for image folders only"), std::string::npos) << camera.out;
+  const CliRun right = RunDvso("odometry --mode stereo --sequence " + dir + " --disparity-right " + dir + " --out " +
+                               dir + "/o");
+  EXPECT_EQ(right.exit_code, 1) << right.out;
+  EXPECT_NE(right.out.find("need --mode dvso"), std::string::npos) << right.out;
+  EXPECT_FALSE(fs::exists(dir + "/o"));
+}
+
 TEST(Cli, RightGroundTruthWithoutRightLabelsIsAnError) {
   const std::string dir = TempDir("right_gt");
   const CliRun r = RunDvso("labels --sequence " + dir + " --out " + dir + "/l --gt-disparity-right " + dir);

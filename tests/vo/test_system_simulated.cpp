@@ -204,11 +204,15 @@ TEST(SystemSimulated, DamagedFrameIsCountedAsLostAndTheRunGoesOnUnlessStrict) {
   }
   EXPECT_EQ(unreadable, 1);
   EXPECT_EQ(tracked_after, 4);  // tracking went on after the damaged frame
-  const auto strict = dvso::testing::RunDvso("odometry --mode stereo --preset fast --no-progress --strict --sequence " +
-                                             seq + " --out " + dir + "/strict");
+  const auto strict = dvso::testing::RunDvso("odometry --mode stereo --preset fast --no-progress --strict --ply "
+                                             "--sequence " + seq + " --out " + dir + "/strict");
   EXPECT_EQ(strict.exit_code, 1);
   EXPECT_NE(strict.out.find("000007.png"), std::string::npos) << strict.out;
   EXPECT_FALSE(std::filesystem::exists(dir + "/strict/trajectory.txt"));
+  // Nor any temporary file of the writers (the run log's partial file, the point cloud's body).
+  for (const auto& entry : std::filesystem::directory_iterator(dir + "/strict")) {
+    ADD_FAILURE() << "left behind by the failed run: " << entry.path();
+  }
   // A run that fails keeps an earlier interrupted run's files marked as partial.
   std::filesystem::create_directories(dir + "/strict_again");
   std::ofstream(dir + "/strict_again/INTERRUPTED") << "interrupted after 3 of 14 frames\n";

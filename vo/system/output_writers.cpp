@@ -105,6 +105,11 @@ PlyPointWriter::PlyPointWriter(const std::string& ply_path, int min_good_residua
   RequireFile(body_.good(), body_path_, "cannot write point cloud");
 }
 
+PlyPointWriter::~PlyPointWriter() {
+  body_.close();
+  std::remove(body_path_.c_str());  // gone already after OnFinished
+}
+
 void PlyPointWriter::OnPointsMarginalized(const std::vector<PointInfo>& points) {
   for (const PointInfo& p : points) {
     if (p.num_good_residuals < min_good_residuals_ || !p.world.allFinite()) continue;

@@ -62,6 +62,8 @@ class PlyPointWriter : public OdometryObserver {
  public:
   // Keeps points with at least `min_good_residuals` good temporal residuals.
   PlyPointWriter(const std::string& ply_path, int min_good_residuals = 1);
+  // A run that failed leaves neither the PLY nor its temporary body behind.
+  ~PlyPointWriter() override;
   void OnPointsMarginalized(const std::vector<PointInfo>& points) override;
   void OnFinished() override;
   long num_points() const { return count_; }
