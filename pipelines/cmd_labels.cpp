@@ -89,6 +89,7 @@ void RunLabels(const LabelsArgs& args) {
     }
     const labels::LabelRunSummary summary = labels::RunLabelExtraction(sequence, out, run);
     all.push_back(summary.ToJson());
+    total.Merge(summary.statistics);
     if (!args.json) {
       std::cout << "== " << sequence << " -> " << out << (summary.skipped_complete ? " (complete, skipped)" : "") << "\n"
                 << summary.statistics.ToText();
@@ -111,7 +112,17 @@ void RunLabels(const LabelsArgs& args) {
       std::cout << std::flush;
     }
   }
-  if (args.json) std::cout << (all.size() == 1 ? all[0] : all).dump(2) << std::endl;
+  // --sequence: its summary; --list (any length, so scripts get one shape): every summary and the
+  // statistics of all sequences' frames together.
+  if (args.list.empty()) {
+    if (args.json) std::cout << all[0].dump(2) << std::endl;
+    return;
+  }
+  if (args.json) {
+    std::cout << nlohmann::json{{"sequences", all}, {"overall", total.ToJson()}}.dump(2) << std::endl;
+  } else {
+    std::cout << "== overall: " << sequences.size() << " sequences\n" << total.ToText() << std::flush;
+  }
 }
 
 }  // namespace

@@ -1,5 +1,6 @@
 #include "sdso_labels/label_stats.h"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -32,6 +33,17 @@ void LabelStatistics::AddFrame(const cv::Mat& labels, const cv::Mat& ground_trut
   min_labels_ = frames_ == 0 ? count : std::min(min_labels_, count);
   total_labels_ += count;
   ++frames_;
+}
+
+void LabelStatistics::Merge(const LabelStatistics& other) {
+  if (other.frames_ == 0) return;
+  min_labels_ = frames_ == 0 ? other.min_labels_ : std::min(min_labels_, other.min_labels_);
+  frames_ += other.frames_;
+  total_labels_ += other.total_labels_;
+  compared_ += other.compared_;
+  within_1px_ += other.within_1px_;
+  within_3pct_ += other.within_3pct_;
+  abs_error_sum_ += other.abs_error_sum_;
 }
 
 nlohmann::json LabelStatistics::ToJson() const {

@@ -14,6 +14,8 @@ class LabelStatistics {
   // `labels` and `ground_truth` are CV_32F disparity maps, 0 = none/unknown;
   // ground_truth may be empty (no accuracy then).
   void AddFrame(const cv::Mat& labels, const cv::Mat& ground_truth = cv::Mat());
+  // Adds every frame of `other` (the statistics of several sequences together).
+  void Merge(const LabelStatistics& other);
 
   long frames() const { return frames_; }
   double mean_labels_per_frame() const { return frames_ ? static_cast<double>(total_labels_) / frames_ : 0.0; }

@@ -80,6 +80,15 @@ TEST(LabelStatistics, CountsAndAccuracyByHand) {
   EXPECT_DOUBLE_EQ(stats.share_within_3_percent(), 2.0 / 3);
   EXPECT_NEAR(stats.mean_absolute_error(), (0.5 + 1.2 + 0.1) / 3, 1e-5);
   EXPECT_EQ(stats.ToJson()["labels_per_frame_min"], 1);
+
+  // Merging the frames one sequence at a time gives the statistics of all frames together.
+  LabelStatistics first, second, merged;
+  first.AddFrame(labels, gt);
+  second.AddFrame(one);
+  merged.Merge(LabelStatistics{});  // an empty one changes nothing (its min of 0 included)
+  merged.Merge(first);
+  merged.Merge(second);
+  EXPECT_EQ(merged.ToJson(), stats.ToJson());
 }
 
 TEST(LabelMap, DepthEdgesAreNotLabelled) {
