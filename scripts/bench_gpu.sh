@@ -6,7 +6,8 @@
 #
 #   scripts/bench_gpu.sh [MODEL.pt]     (env: PYTHON, BUILD_DIR, HEIGHT, WIDTH, BATCH, RUNS)
 #
-# Needs: python3 with a CUDA build of torch (`python3 -c "import torch; print(torch.cuda.is_available())"`).
+# Needs: python3 with a CUDA build of torch already installed (as on the lent device image; this project installs
+# nothing from PyPI) (`python3 -c "import torch; print(torch.cuda.is_available())"`).
 # The C++ ABI of the pip wheel decides _GLIBCXX_USE_CXX11_ABI; CMake picks it up
 # from TorchConfig.cmake, the other dependencies are the Debian ones.
 set -euo pipefail
@@ -23,7 +24,7 @@ TORCH_CMAKE=$("$PYTHON" -c "import torch; print(torch.utils.cmake_prefix_path)")
 cmake -S . -B "$BUILD_DIR" -G Ninja -DCMAKE_BUILD_TYPE=Release -DDVSO_WITH_TORCH=ON \
   -DDVSO_BUILD_TESTS=OFF -DDVSO_BUILD_BENCHMARKS=OFF -DCMAKE_PREFIX_PATH="$TORCH_CMAKE"
 cmake --build "$BUILD_DIR" -j "$(nproc)" --target dvso
-DVSO="$BUILD_DIR/pipelines/dvso"
+DVSO="$BUILD_DIR/dvso"  # pipelines/CMakeLists.txt puts the binary at the top of the build folder
 
 MODEL=${1:-}
 if [[ -z "$MODEL" ]]; then

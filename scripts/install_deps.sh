@@ -7,6 +7,7 @@ PACKAGES=(
   libeigen3-dev libopencv-dev libyaml-cpp-dev libsuitesparse-dev libopenblas-dev
   libcli11-dev nlohmann-json3-dev libgtest-dev libgmock-dev libbenchmark-dev
   libtorch-dev
+  time python3  # benchmarks/*.sh: peak memory (/usr/bin/time -f %M) and their JSON summaries
 )
 missing=()
 for p in "${PACKAGES[@]}"; do

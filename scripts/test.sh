@@ -2,7 +2,7 @@
 # Installs dependencies, builds, and runs the whole test suite with CTest; then
 # builds the non-Torch configuration with AddressSanitizer + UndefinedBehaviorSanitizer
 # (no recovery: any finding fails its test) into ${SANITIZE_BUILD_DIR:-build-asan}
-# and runs its test suite too. On 2 cores: ~20 + 2 min, then ~18 + 15 min.
+# and runs its test suite too. On 2 cores, from a fresh clone: ~50 min in all (README, test-suite row).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/install_deps.sh

@@ -231,10 +231,14 @@ step_train() {
   log "train $CONFIG -> $RUN ${resume[*]:-}"
   curve_monitor >> "$RUN/curve_monitor.log" 2>&1 &
   local monitor=$!
+  # A failed or interrupted training (set -e, Ctrl-C) must not leave the monitor polling forever (a rerun
+  # would start a second one writing the same curve rows).
+  trap "touch '$RUN/train.done'; kill $monitor 2>/dev/null || true" EXIT
   local start=$SECONDS
   run "$DVSO" train --config "$CONFIG" --output-dir "$RUN" "${resume[@]}" >> "$RUN/train.log" 2>&1
   echo "$((SECONDS - start))" >> "$RUN/train_seconds.txt"
   wait "$monitor" || true
+  trap - EXIT
   touch "$RUN/train.done"
 }
 

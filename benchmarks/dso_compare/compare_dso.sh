@@ -36,7 +36,9 @@ mkdir -p "$WORK"
 # 1. DSO's extra dependencies (idempotent).
 if ! dpkg -s libboost-thread-dev libboost-system-dev >/dev/null 2>&1; then
   SUDO=""; [[ $(id -u) -ne 0 ]] && SUDO=sudo
-  $SUDO apt-get install -y libboost-thread-dev libboost-system-dev
+  $SUDO apt-get update -qq  # images whose package lists were cleaned would not find them otherwise
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends libboost-thread-dev \
+    libboost-system-dev
 fi
 
 # 2. DSO library + our driver. DSO (2017) predates two API removals in Debian 12's libraries:
