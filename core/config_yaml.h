@@ -25,12 +25,17 @@ class YamlSection {
   static YamlSection FromString(const std::string& text, const std::string& origin = "<string>");
 
   // Reads `key` into *value when present (keeps the default otherwise).
-  // Throws dvso::Error naming the origin and key on a type mismatch.
+  // Throws dvso::Error naming the origin and key on a type mismatch, and on a
+  // key without a value (`max_depth:` or `~`): a forgotten value must not
+  // silently mean the default.
   template <typename T>
   bool Read(const std::string& key, T* value) {
     used_.insert(key);
     const YAML::Node child = node_[key];
-    if (!child.IsDefined() || child.IsNull()) return false;
+    if (!child.IsDefined()) return false;
+    if (child.IsNull()) {
+      throw Error(origin_, "key '" + Where(key) + "' has no value (give one, or remove the key for the default)");
+    }
     try {
       *value = child.as<T>();
     } catch (const YAML::Exception& e) {

@@ -460,4 +460,15 @@ TEST(YamlSection, StrictKeysAndNestedSections) {
   EXPECT_THROW(nested.RequireAllKeysUsed(), Error);
   YamlSection wrong_type = YamlSection::FromString("points: many\n", "cfg");
   EXPECT_THROW(wrong_type.Read("points", &points), Error);
+  // A key whose value was forgotten (or ~) is an error naming it, not a silent default.
+  for (const char* text : {"points:\n", "points: ~\n", "tracker:\n  levels:\n"}) {
+    YamlSection empty = YamlSection::FromString(text, "cfg");
+    try {
+      empty.Read("points", &points);
+      empty.Child("tracker").Read("levels", &levels);
+      ADD_FAILURE() << "accepted: " << text;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("has no value"), std::string::npos) << e.what();
+    }
+  }
 }

@@ -6,6 +6,7 @@
 #include <set>
 
 #include "tests/vo/test_backend_util.h"
+#include "vo/optimization/accumulator.h"
 #include "vo/optimization/window.h"
 
 namespace dvso::vo {
@@ -136,6 +137,33 @@ TEST(BackendOptimizer, MonoWithoutStereoKeepsWrongScale) {
   sw.window->Optimize(30);
   EXPECT_GT(ComputeErrors(sw).max_translation, 0.1);
   EXPECT_LT(ComputeErrors(sw, AlignScale(sw)).max_translation, 0.03);
+}
+
+// A rejected step restores the state, and with it each point's H_dd (idepth_hessian), which the trial
+// linearisation had overwritten with the information of the state that was thrown away.
+TEST(BackendOptimizer, RejectedStepsLeaveTheDepthInformationOfTheKeptState) {
+  WindowOptions options;
+  // Inverse depths clamped to at least 20 (5 cm): the window starts there, and every step that the
+  // clamp leaves is worse than the start (measured: no step accepted), so each trial is rejected.
+  options.min_idepth = 20.0;
+  auto sw = BuildSceneWindow(options, PerturbedSpec());
+  std::vector<Keyframe> expected = sw.window->mutable_keyframes();  // a copy
+  std::vector<PointRef> refs;
+  for (int h = 0; h < static_cast<int>(expected.size()); ++h)
+    for (int i = 0; i < static_cast<int>(expected[h].points.size()); ++i) refs.push_back({h, i});
+  WindowLinearizer(&expected, sw.window->camera(), options).Linearize(refs);  // H_dd of the start state
+  const OptimizationSummary summary = sw.window->Optimize(3);
+  ASSERT_EQ(summary.accepted_steps, 0);
+  int compared = 0;
+  for (const PointRef& r : refs) {
+    const Point& kept = sw.window->keyframe(r.host_index).points[r.point_index];
+    const Point& start = expected[r.host_index].points[r.point_index];
+    ASSERT_EQ(kept.idepth, start.idepth);
+    EXPECT_FLOAT_EQ(kept.idepth_hessian, start.idepth_hessian);
+    EXPECT_FLOAT_EQ(kept.idepth_hessian_temporal, start.idepth_hessian_temporal);
+    compared += start.idepth_hessian > 0;
+  }
+  EXPECT_GT(compared, 100);
 }
 
 TEST(BackendOptimizer, RemoveOutliersDropsCorruptedPoints) {

@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <opencv2/imgproc.hpp>
+
 #include "core/lie.h"
 #include "tests/vo/frontend_test_scene.h"
 #include "vo/frontend/immature_point.h"
@@ -53,6 +55,36 @@ TEST(FrontendImmature, StaticStereoMatchingRecoversDepth) {
   ASSERT_GT(total, 400);
   EXPECT_GT(good, 0.8 * total);
   EXPECT_GT(accurate, 0.9 * good);
+}
+
+// The static stereo search covers the whole segment it is given: a pair shifted by 150 px (a surface
+// 2.6 m away at KITTI's fx * b of 388 px) searched over 248 px (0.2 x 1241, the odometry's default)
+// finds every match. DSO's cap of 100 samples cut the search at 100 px and took wrong matches nearer.
+TEST(FrontendImmature, StaticStereoSearchCoversDisparitiesBeyondAHundredPixels) {
+  constexpr int kWidth = 1241, kHeight = 376, kShift = 150;
+  cv::Mat noise(kHeight, kWidth + kShift, CV_32F);
+  cv::randu(noise, 0.0, 255.0);
+  cv::GaussianBlur(noise, noise, cv::Size(0, 0), 1.5);
+  const cv::Mat left = noise(cv::Rect(0, 0, kWidth, kHeight)).clone();  // right(x) = left(x + shift)
+  const cv::Mat right = noise(cv::Rect(kShift, 0, kWidth, kHeight)).clone();
+  const PinholeCamera cam = testing::TestCamera(kWidth, kHeight);
+  const ImagePyramid left_pyramid(left, cam), right_pyramid(right, cam);
+  PixelSelectorOptions selection;
+  selection.desired_points = 1500;
+  const float fxb = 388.0f;  // any fx * b: the estimate is compared as a disparity
+  const Eigen::Vector3f Kt(-fxb, 0.f, 0.f);
+  int searched = 0, right_matches = 0;
+  for (const SelectedPixel& px : SelectPixels(left_pyramid, selection)) {
+    if (px.x < kShift + 10) continue;  // the match would lie outside the right image
+    ImmaturePoint p;
+    if (!p.Initialize(left_pyramid.level(0), 0, px.x, px.y, px.level)) continue;
+    ++searched;
+    const auto status = p.Trace(right_pyramid.level(0), Eigen::Matrix3f::Identity(), Kt, 1.f, 0.f,
+                                ImmaturePointOptions{}, 0.2f * kWidth);
+    if (status == TraceStatus::kGood && std::fabs(p.IdepthEstimate() * fxb - kShift) < 1.0f) ++right_matches;
+  }
+  ASSERT_GT(searched, 500);
+  EXPECT_GT(right_matches, 0.9 * searched);
 }
 
 // Static stereo from integer pixels walks integer positions and reads pixels

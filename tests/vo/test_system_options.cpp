@@ -62,6 +62,13 @@ TEST(SystemOptions, StrictKeysAndCheckedValues) {
     EXPECT_NE(std::string(e.what()).find("dvso.virtual_baseline"), std::string::npos) << e.what();
   }
   EXPECT_EQ(OdometryOptionsToYaml(OdometryOptions()).find("virtual_stereo_baseline"), std::string::npos);
+  // immature.max_steps (DSO's 100-sample cap of the epipolar search) is gone: an old config is told so.
+  try {
+    OdometryOptionsFromYamlString("immature:\n  max_steps: 100\n");
+    ADD_FAILURE() << "immature.max_steps accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("immature.max_steps is no longer a setting"), std::string::npos) << e.what();
+  }
   EXPECT_THROW(OdometryOptionsFromYamlString("window:\n  max_keyframes: 1\n"), Error);
   try {
     OdometryOptionsFromYamlString("selector:\n  desired_pts: 3\n");

@@ -213,6 +213,13 @@ TEST(SystemSimulated, DamagedFrameIsCountedAsLostAndTheRunGoesOnUnlessStrict) {
   for (const auto& entry : std::filesystem::directory_iterator(dir + "/strict")) {
     ADD_FAILURE() << "left behind by the failed run: " << entry.path();
   }
+  // An output path that cannot be a file fails the run before any frame, leaving nothing written.
+  std::filesystem::create_directories(dir + "/blocked/trajectory.txt/x");
+  const auto blocked = dvso::testing::RunDvso("odometry --mode stereo --preset fast --no-progress --sequence " + seq +
+                                              " --out " + dir + "/blocked");
+  EXPECT_EQ(blocked.exit_code, 1);
+  EXPECT_NE(blocked.out.find("blocked/trajectory.txt: is a folder"), std::string::npos) << blocked.out;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/blocked/run_log.csv"));
   // A run that fails keeps an earlier interrupted run's files marked as partial.
   std::filesystem::create_directories(dir + "/strict_again");
   std::ofstream(dir + "/strict_again/INTERRUPTED") << "interrupted after 3 of 14 frames\n";

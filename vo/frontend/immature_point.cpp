@@ -13,7 +13,6 @@ void ImmaturePointOptions::Check() const {
   Require(extra_slack_on_threshold >= 1, "immature extra_slack_on_threshold must be >= 1");
   Require(max_search_fraction > 0, "immature max_search_fraction must be > 0");
   Require(step_size > 0, "immature step_size must be > 0");
-  Require(max_steps >= 2, "immature max_steps must be >= 2");
   Require(slack_interval > 0, "immature slack_interval must be > 0");
   Require(min_improvement_factor >= 1, "immature min_improvement_factor must be >= 1");
   Require(gn_iterations >= 0, "immature gn_iterations must be >= 0");
@@ -127,7 +126,10 @@ TraceStatus ImmaturePoint::Trace(const PyramidLevel& target, const Eigen::Matrix
   // Discrete search.
   const float energy_th = static_cast<float>(kPatternSize * opt.outlier_energy_per_pixel * opt.extra_slack_on_threshold);
   const float step = static_cast<float>(opt.step_size);
-  const int num_steps = std::min(opt.max_steps, static_cast<int>(1.9999f + dist / step));
+  // Every sample of the segment (DSO capped it at 100 steps, the size of its fixed array: with a static
+  // stereo search of 0.2 x 1241 px that cut off every disparity above 100 px, i.e. depths below 3.9 m on
+  // KITTI, and the far end's true match was replaced by a wrong one within the first 100 px).
+  const int num_steps = static_cast<int>(1.9999f + dist / step);
   const float sx = dx_unit * step, sy = dy_unit * step;
   const float huber = static_cast<float>(opt.huber_threshold);
   float best_energy = 1e10f, second_energy = 1e10f;

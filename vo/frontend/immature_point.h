@@ -24,7 +24,6 @@ struct ImmaturePointOptions {
   double extra_slack_on_threshold = 1.2; // DSO setting_trace_extraSlackOnTH
   double max_search_fraction = 0.027;    // unbounded intervals: search (w + h) * this pixels (DSO setting_maxPixSearch)
   double step_size = 1.0;                // pixels per search step (DSO setting_trace_stepsize)
-  int max_steps = 100;                   // cap of the discrete search
   double slack_interval = 1.5;           // skip the search when the interval spans fewer pixels (DSO setting_trace_slackInterval)
   double min_improvement_factor = 2.0;   // skip when the expected error is not this much below the interval (DSO)
   int gn_iterations = 3;                 // Gauss-Newton refinement steps along the line (DSO setting_trace_GNIterations)

@@ -23,6 +23,9 @@ struct StateBackup {
   std::vector<Eigen::Isometry3d> poses;
   std::vector<double> a, b;
   std::vector<double> idepths;
+  // H_dd of each point: a trial linearisation overwrites it, and a rejected trial must not leave the
+  // information of a state that was thrown away (the label filter and marginalisation read it).
+  std::vector<std::pair<float, float>> idepth_hessians;  // (all residuals, temporal only)
   std::vector<std::pair<ResidualState, float>> residual_states;
 };
 
@@ -33,7 +36,11 @@ StateBackup Backup(const std::vector<Keyframe>& kfs, const std::vector<PointRef>
     s.a.push_back(kf.a);
     s.b.push_back(kf.b);
   }
-  for (const PointRef& r : refs) s.idepths.push_back(kfs[r.host_index].points[r.point_index].idepth);
+  for (const PointRef& r : refs) {
+    const Point& p = kfs[r.host_index].points[r.point_index];
+    s.idepths.push_back(p.idepth);
+    s.idepth_hessians.emplace_back(p.idepth_hessian, p.idepth_hessian_temporal);
+  }
   for (const Keyframe& kf : kfs) {
     for (const Point& p : kf.points) {
       for (const Residual& r : p.residuals) s.residual_states.emplace_back(r.state, r.energy);
@@ -48,7 +55,12 @@ void Restore(const StateBackup& s, const std::vector<PointRef>& refs, std::vecto
     (*kfs)[i].a = s.a[i];
     (*kfs)[i].b = s.b[i];
   }
-  for (size_t i = 0; i < refs.size(); ++i) (*kfs)[refs[i].host_index].points[refs[i].point_index].idepth = s.idepths[i];
+  for (size_t i = 0; i < refs.size(); ++i) {
+    Point& p = (*kfs)[refs[i].host_index].points[refs[i].point_index];
+    p.idepth = s.idepths[i];
+    p.idepth_hessian = s.idepth_hessians[i].first;
+    p.idepth_hessian_temporal = s.idepth_hessians[i].second;
+  }
   size_t k = 0;
   for (Keyframe& kf : *kfs) {
     for (Point& p : kf.points) {

@@ -62,7 +62,6 @@ void VisitFields(Options& o, Visitor&& v) {
   v("immature", "extra_slack_on_threshold", o.immature.extra_slack_on_threshold);
   v("immature", "max_search_fraction", o.immature.max_search_fraction);
   v("immature", "step_size", o.immature.step_size);
-  v("immature", "max_steps", o.immature.max_steps);
   v("immature", "slack_interval", o.immature.slack_interval);
   v("immature", "min_improvement_factor", o.immature.min_improvement_factor);
   v("immature", "gn_iterations", o.immature.gn_iterations);
@@ -132,6 +131,14 @@ OdometryOptions FromSection(YamlSection& root, const OdometryOptions& base) {
       window != children.end() && window->second->Has("virtual_stereo_baseline")) {
     throw Error(root.origin(), "window.virtual_stereo_baseline is not a setting: the virtual baseline b_v is "
                                "dvso.virtual_baseline (0 = the model's); delete the line");
+  }
+  // immature.max_steps capped the discrete epipolar search at 100 samples and so cut off the static stereo
+  // search beyond 100 px of disparity: removed, the search covers its whole segment.
+  if (const auto immature = children.find("immature");
+      immature != children.end() && immature->second->Has("max_steps")) {
+    throw Error(root.origin(), "immature.max_steps is no longer a setting (the epipolar search covers its whole "
+                               "interval; immature.max_search_fraction and stereo_max_disparity_fraction bound it): "
+                               "delete the line");
   }
   root.RequireAllKeysUsed();
   try {

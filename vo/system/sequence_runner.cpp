@@ -79,6 +79,13 @@ SequenceRunSummary RunOdometryOnSequence(const SequenceReader& sequence, const O
                                            std::to_string(sequence.size()) + " frames)");
   const int end = RunEndFrame(sequence.size(), run.first, run.count);
   EnsureDirectory(out_dir);
+  // Checked before the run: the log and point cloud are finished (renamed into place) before the
+  // trajectories are written, so a trajectory path that cannot be a file would fail the run only after
+  // its log had replaced an earlier run's.
+  for (const char* name : {"trajectory.txt", "trajectory_tum.txt", "config.yaml", "run_log.csv", "points.ply"}) {
+    const std::string path = JoinPath(out_dir, name);
+    RequireFile(!std::filesystem::is_directory(path), path, "is a folder: the run cannot write its output there");
+  }
 
   System system(options, sequence.camera(), mode, run.predictions);
   TrajectoryRecorder recorder;
