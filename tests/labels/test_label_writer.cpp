@@ -2,8 +2,10 @@
 // the keyframes are final, use the final poses, and every frame gets a file.
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <filesystem>
 #include <random>
+#include <thread>
 
 #include "core/disparity_io.h"
 #include "core/error.h"
@@ -463,6 +465,30 @@ TEST(LabelProducer, WorkerErrorsReachTheCaller) {
   }
   EXPECT_TRUE(thrown);
   EXPECT_LT(producer.frames_written(), 6);
+}
+
+// The time the image loader takes (a pair decoded again) is image-read time, counted by the reader: the
+// label time excludes it, so the run summary does not subtract it twice.
+TEST(LabelProducer, LabelTimeExcludesTheImageLoader) {
+  constexpr int kFrames = 4;
+  constexpr auto kLoad = std::chrono::milliseconds(40);
+  LabelProducer producer(Camera(), LabelProducerOptions{}, TempDir() + "_timing", {},
+                         [&](int, cv::Mat* left, cv::Mat* right) {
+                           std::this_thread::sleep_for(kLoad);
+                           *left = cv::Mat(21, 41, CV_8U, cv::Scalar(0));
+                           *right = left->clone();
+                         });
+  for (int i = 0; i < kFrames; ++i) {
+    LabelJob job;
+    job.frame_index = i;
+    job.has_pose = true;
+    job.points.push_back({Eigen::Vector3d(0, 0, 10)});
+    producer.Submit(std::move(job));
+  }
+  producer.Finish();
+  EXPECT_EQ(producer.frames_written(), kFrames);
+  const double load_ms = std::chrono::duration<double, std::milli>(kLoad).count();
+  EXPECT_LT(producer.counters().extract_ms, 0.5 * kFrames * load_ms);
 }
 
 TEST(LabelProducer, RightLabelsSeeThePointsFromTheRightCamera) {
