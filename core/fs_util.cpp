@@ -33,6 +33,8 @@ void WriteAtomically(const std::string& path,
 }
 
 bool IsUnfinishedAtomicWrite(const std::filesystem::path& path) {
+  // "000001.tmp-writing.png", or "INTERRUPTED.tmp-writing" for a target without an extension.
+  if (path.extension() == kAtomicWriteTag) return true;
   const std::string stem = path.stem().string();
   const std::string tag = kAtomicWriteTag;
   return stem.size() >= tag.size() && stem.compare(stem.size() - tag.size(), tag.size(), tag) == 0;

@@ -71,7 +71,7 @@ void RunLabels(const LabelsArgs& args) {
     }
   }
   nlohmann::json all = nlohmann::json::array();
-  labels::LabelStatistics total;
+  labels::LabelStatistics total, total_right;
   for (size_t s = 0; s < sequences.size(); ++s) {
     const std::string& sequence = sequences[s];
     const std::string out = args.list.empty()
@@ -90,6 +90,7 @@ void RunLabels(const LabelsArgs& args) {
     const labels::LabelRunSummary summary = labels::RunLabelExtraction(sequence, out, run);
     all.push_back(summary.ToJson());
     total.Merge(summary.statistics);
+    total_right.Merge(summary.right_statistics);
     if (!args.json) {
       std::cout << "== " << sequence << " -> " << out << (summary.skipped_complete ? " (complete, skipped)" : "") << "\n"
                 << summary.statistics.ToText();
@@ -119,9 +120,13 @@ void RunLabels(const LabelsArgs& args) {
     return;
   }
   if (args.json) {
-    std::cout << nlohmann::json{{"sequences", all}, {"overall", total.ToJson()}}.dump(2) << std::endl;
+    nlohmann::json overall = total.ToJson();
+    if (options.labels.right_labels) overall["right"] = total_right.ToJson();
+    std::cout << nlohmann::json{{"sequences", all}, {"overall", overall}}.dump(2) << std::endl;
   } else {
-    std::cout << "== overall: " << sequences.size() << " sequences\n" << total.ToText() << std::flush;
+    std::cout << "== overall: " << sequences.size() << " sequences\n" << total.ToText();
+    if (options.labels.right_labels) std::cout << "right image:\n" << total_right.ToText();
+    std::cout << std::flush;
   }
 }
 

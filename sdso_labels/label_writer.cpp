@@ -171,6 +171,8 @@ bool LabelWriter::Usable(const vo::PointInfo& p) const {
 }
 
 void LabelWriter::OnPointsMarginalized(const std::vector<vo::PointInfo>& points) {
+  // Activated candidates that left before any window event showed them (e.g. at once, out of view).
+  ForgetActivatedCandidates(points);
   for (const auto& p : points) {
     if (!Usable(p)) continue;
     // Keep points of keyframes that a pending frame needs, or that may become a recent past keyframe.

@@ -178,6 +178,17 @@ TEST(DisparityIo, KittiPngRoundTripQuantisesTo1Over256) {
   EXPECT_FLOAT_EQ(back.at<float>(3, 4), 0.f);
   EXPECT_FLOAT_EQ(back.at<float>(2, 1), 0.f);
   EXPECT_FALSE(fs::exists(dir + "/d.tmp-writing.png"));
+  // The temporary-file names WriteAtomically uses, with and without an extension, and nothing else.
+  EXPECT_TRUE(IsUnfinishedAtomicWrite("out/000001.tmp-writing.png"));
+  EXPECT_TRUE(IsUnfinishedAtomicWrite("out/INTERRUPTED.tmp-writing"));
+  EXPECT_FALSE(IsUnfinishedAtomicWrite("out/000001.png"));
+  EXPECT_FALSE(IsUnfinishedAtomicWrite("out/tmp-writing.png"));
+  EXPECT_FALSE(IsUnfinishedAtomicWrite("out/INTERRUPTED"));
+  // NormalizedFolderPath: the folder's own name whatever the spelling.
+  for (const std::string spelling : {dir, dir + "/", dir + "/.", dir + "/../" + fs::path(dir).filename().string()}) {
+    EXPECT_EQ(NormalizedFolderPath(spelling).filename(), fs::path(dir).filename()) << spelling;
+  }
+  EXPECT_EQ(NormalizedFolderPath(".").filename(), fs::current_path().filename());
   // An 8-bit PNG is not a KITTI map.
   cv::imwrite(dir + "/eight.png", cv::Mat(3, 3, CV_8U, cv::Scalar(7)));
   EXPECT_THROW(ReadKittiMapPng(dir + "/eight.png"), Error);

@@ -58,8 +58,9 @@ TEST(FrontendImmature, StaticStereoMatchingRecoversDepth) {
 }
 
 // The static stereo search covers the whole segment it is given: a pair shifted by 150 px (a surface
-// 2.6 m away at KITTI's fx * b of 388 px) searched over 248 px (0.2 x 1241, the odometry's default)
-// finds every match. DSO's cap of 100 samples cut the search at 100 px and took wrong matches nearer.
+// 2.6 m away at KITTI's fx * b of 388 px) searched over 248 px (0.2 x 1241, with the odometry's
+// stereo_max_disparity_px raised) finds every match. DSO's cap of 100 samples cut the search at 100 px
+// and took wrong matches nearer.
 TEST(FrontendImmature, StaticStereoSearchCoversDisparitiesBeyondAHundredPixels) {
   constexpr int kWidth = 1241, kHeight = 376, kShift = 150;
   cv::Mat noise(kHeight, kWidth + kShift, CV_32F);

@@ -56,6 +56,7 @@ void OdometryOptions::Check() const {
   Require(optimization_iterations >= 0, "optimization_iterations must be >= 0");
   Require(stereo_max_disparity_fraction > 0 && stereo_max_disparity_fraction <= 1,
           "stereo_max_disparity_fraction must be in (0, 1]");
+  Require(stereo_max_disparity_px >= 1, "stereo_max_disparity_px must be >= 1");
   Require(min_activation_distance >= 1, "min_activation_distance must be >= 1");
   Require(max_consecutive_lost >= 1, "max_consecutive_lost must be >= 1");
   pyramid.Check();

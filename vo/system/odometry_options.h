@@ -59,12 +59,12 @@ struct OdometryOptions {
   int active_points = 2000;           // desired active points in the window (DSO setting_desiredPointDensity)
   int optimization_iterations = 6;    // LM iterations per keyframe (DSO setting_maxOptIterations)
   bool bundle_adjustment = true;      // run the windowed optimisation (off: poses from tracking only, for diagnosis)
-  // Static stereo search length, fraction of the image width (99 px at 1241: surfaces nearer than
-  // fx*b / (0.08 w) = 3.9 m on KITTI are not matched). Until session 23 DSO's cap of 100 search steps
-  // silently cut the 0.2 written here to 100 px; the whole 0.2 x 1241 px cost 3-4 % of the labels on 4 of
-  // 5 issue-12 worlds (two below 1500/frame) and 0.85 points of accuracy on one, so 0.08 keeps what all
-  // measurements were made with at KITTI size (docs/labels.md, session 23).
-  double stereo_max_disparity_fraction = 0.08;
+  double stereo_max_disparity_fraction = 0.2;  // static stereo search length, fraction of the image width ...
+  // ... and at most this many pixels. Until session 23 DSO's cap of 100 search steps did this silently
+  // (the 0.2 alone is 248 px at 1241); searching all 248 px cost 3-4 % of the labels on 4 of 5 issue-12
+  // worlds and 0.85 points of accuracy on one (docs/labels.md, session 23): a longer search finds more
+  // look-alike patches. Surfaces nearer than fx*b / 100 px (3.9 m on KITTI) are not matched.
+  double stereo_max_disparity_px = 100.0;
   double min_activation_distance = 2.0;  // lower bound of the adaptive activation grid cell (pixels)
   bool reinitialize_on_loss = true;   // tracking failure -> start a new map (else the run stops)
   int max_consecutive_lost = 1000000; // give up (error) after this many consecutive lost frames

@@ -25,6 +25,7 @@ void VisitFields(Options& o, Visitor&& v) {
   v("", "optimization_iterations", o.optimization_iterations);
   v("", "bundle_adjustment", o.bundle_adjustment);
   v("", "stereo_max_disparity_fraction", o.stereo_max_disparity_fraction);
+  v("", "stereo_max_disparity_px", o.stereo_max_disparity_px);
   v("", "min_activation_distance", o.min_activation_distance);
   v("", "reinitialize_on_loss", o.reinitialize_on_loss);
   v("", "max_consecutive_lost", o.max_consecutive_lost);
@@ -132,13 +133,13 @@ OdometryOptions FromSection(YamlSection& root, const OdometryOptions& base) {
     throw Error(root.origin(), "window.virtual_stereo_baseline is not a setting: the virtual baseline b_v is "
                                "dvso.virtual_baseline (0 = the model's); delete the line");
   }
-  // immature.max_steps capped the discrete epipolar search at 100 samples and so cut off the static stereo
-  // search beyond 100 px of disparity: removed, the search covers its whole segment.
+  // immature.max_steps capped every discrete epipolar search at 100 samples, silently: removed, a search
+  // covers its whole segment, and the static stereo limit is the explicit stereo_max_disparity_px.
   if (const auto immature = children.find("immature");
       immature != children.end() && immature->second->Has("max_steps")) {
-    throw Error(root.origin(), "immature.max_steps is no longer a setting (the epipolar search covers its whole "
-                               "interval; immature.max_search_fraction and stereo_max_disparity_fraction bound it): "
-                               "delete the line");
+    throw Error(root.origin(), "immature.max_steps is no longer a setting (it cut every epipolar search at 100 "
+                               "samples; the static stereo search is now limited by stereo_max_disparity_px, "
+                               "default 100): delete the line");
   }
   root.RequireAllKeysUsed();
   try {

@@ -87,7 +87,8 @@ void System::AddCandidates(int keyframe_id, const ImagePyramid& left, const Imag
   const std::vector<SelectedPixel> pixels = SelectPixels(left, options_.selector, &selector_block_size_);
   c.points.reserve(pixels.size());
   const Eigen::Vector3f stereo_Kt(static_cast<float>(-camera_.FxB()), 0.f, 0.f);
-  const float max_disparity = static_cast<float>(options_.stereo_max_disparity_fraction * camera_.left.width);
+  const float max_disparity = static_cast<float>(
+      std::min(options_.stereo_max_disparity_fraction * camera_.left.width, options_.stereo_max_disparity_px));
   const DvsoOptions& dvso = options_.dvso;
   for (const SelectedPixel& px : pixels) {
     float predicted_idepth = 0.0f;
