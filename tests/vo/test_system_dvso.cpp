@@ -453,9 +453,10 @@ TEST(DvsoCli, TuneBaselineNamesItsMetricAndScoresByTRelOnlyWithSegments) {
   EXPECT_DOUBLE_EQ(l["mean_error"][0]["mean_error"].get<double>(), l["runs"][0]["t_rel"].get<double>());
 }
 
+// Several sequences need a model (disparity files belong to one sequence), so only builds with LibTorch
+// have this test (tests/CMakeLists.txt defines DVSO_WITH_TORCH for them).
+#ifdef DVSO_WITH_TORCH
 TEST(DvsoCli, TuneBaselineScoresEverySequenceByAteWhenOneIsTooShortForSegments) {
-  // Several sequences need a model (disparity files belong to one sequence), so LibTorch: its builds have `export`.
-  if (dvso::testing::RunDvso("export --help").exit_code != 0) GTEST_SKIP() << "build without LibTorch";
   const std::string model = std::string(DVSO_TEST_DATA_DIR) + "/../models/stacknet_cpu_main.pt";
   ASSERT_TRUE(std::filesystem::exists(model));
   const std::string dir = dvso::testing::FreshSimulatedSequence("dvso_tune_mixed", kShortCliFrames);
@@ -476,6 +477,7 @@ TEST(DvsoCli, TuneBaselineScoresEverySequenceByAteWhenOneIsTooShortForSegments) 
   const double mean_ate = 0.5 * (j["runs"][0]["ate_rmse"].get<double>() + j["runs"][1]["ate_rmse"].get<double>());
   EXPECT_NEAR(j["mean_error"][0]["mean_error"].get<double>(), mean_ate, 1e-12);
 }
+#endif  // DVSO_WITH_TORCH
 
 TEST(DvsoCli, TuneBaselineChecksWriteModelBeforeAnyRun) {
   const std::string dir = dvso::testing::FreshSimulatedSequence("dvso_tune_write_model", kShortCliFrames);
