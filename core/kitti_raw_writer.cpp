@@ -164,23 +164,28 @@ std::string CamToCamText(const RawCamera& left, const RawCamera& right, const Ki
 void RequireCalibrationReplaceable(const std::string& date_dir, const std::string& drive_name, bool drive_is_simulated,
                                    const std::vector<std::pair<std::string, std::string>>& calibration) {
   namespace fs = std::filesystem;
+  std::string changed;  // the first calibration file this drive would change
   for (const auto& [path, text] : calibration) {
-    if (!fs::exists(path) || ReadWholeFile(path) == text) continue;
-    std::string other_drives;
-    if (fs::is_directory(date_dir)) {
-      for (const fs::directory_entry& entry : fs::directory_iterator(date_dir)) {
-        const std::string name = entry.path().filename().string();
-        if (entry.is_directory() && name != drive_name && name.find("_drive_") != std::string::npos) {
-          other_drives += (other_drives.empty() ? "" : ", ") + name;
-        }
+    if (fs::exists(path) && ReadWholeFile(path) != text) {
+      changed = path;
+      break;
+    }
+  }
+  if (changed.empty()) return;
+  std::string other_drives;
+  if (fs::is_directory(date_dir)) {
+    for (const fs::directory_entry& entry : fs::directory_iterator(date_dir)) {
+      const std::string name = entry.path().filename().string();
+      if (entry.is_directory() && name != drive_name && name.find("_drive_") != std::string::npos) {
+        other_drives += (other_drives.empty() ? "" : ", ") + name;
       }
     }
-    RequireFile(drive_is_simulated && other_drives.empty(), path,
-                "exists with another calibration" +
-                    (other_drives.empty() ? std::string(" and no simulated drive of this date owns it")
-                                          : " that the drive(s) " + other_drives + " read") +
-                    "; not replaced: choose another --raw-out");
   }
+  RequireFile(drive_is_simulated && other_drives.empty(), changed,
+              "exists with another calibration" +
+                  (other_drives.empty() ? std::string(" and no simulated drive of this date owns it")
+                                        : " that the drive(s) " + other_drives + " read") +
+                  "; not replaced: choose another --raw-out");
 }
 
 // Raw (distorted, unrectified) pixel -> rectified pixel of one camera: the map that warps a
