@@ -329,6 +329,70 @@ void KittiRawDriveOptions::Check() const {
   Require(std::abs(latitude) < 80.0 && std::abs(longitude) <= 180.0, "raw drive: latitude/longitude out of range");
 }
 
+namespace {
+
+// Everything about a drive that is known before a frame is written: its folders, cameras and the texts
+// of the date folder's calibration files.
+struct DrivePlan {
+  RawCamera left, right;
+  KittiRawRig rig = KittiRawRig::KittiLike();
+  std::string date_dir, drive_name, drive_dir, marker;
+  std::vector<std::pair<std::string, std::string>> calibration;  // path, contents
+};
+
+DrivePlan PlanDrive(const std::string& raw_root, const KittiRawDriveOptions& options, const StereoCamera& camera) {
+  DrivePlan plan;
+  plan.left.K_rect << camera.left.fx, 0, camera.left.cx, 0, camera.left.fy, camera.left.cy, 0, 0, 1;
+  plan.left.rect_size = cv::Size(camera.left.width, camera.left.height);
+  const int margin_x = static_cast<int>(std::lround(options.raw_margin * camera.left.width));
+  const int margin_y = static_cast<int>(std::lround(options.raw_margin * camera.left.height));
+  plan.left.raw_size = options.extract ? cv::Size(camera.left.width + 2 * margin_x, camera.left.height + 2 * margin_y)
+                                       : plan.left.rect_size;
+  plan.left.K_raw = plan.left.K_rect;
+  if (options.extract) plan.left.K_raw(0, 2) += margin_x, plan.left.K_raw(1, 2) += margin_y;
+  plan.right = plan.left;
+  plan.right.tx = -camera.left.fx * camera.baseline;
+
+  const char* flavour = options.extract ? "extract" : "sync";
+  char drive_name[64];
+  std::snprintf(drive_name, sizeof(drive_name), "%s_drive_%04d_%s", options.date.c_str(), options.drive, flavour);
+  plan.drive_name = drive_name;
+  plan.date_dir = JoinPath(raw_root, options.date);
+  plan.drive_dir = JoinPath(plan.date_dir, plan.drive_name);
+  plan.marker = JoinPath(plan.drive_dir, kSimulatedDriveMarker);
+  const KittiRawRig& rig = plan.rig;
+  plan.calibration = {
+      {JoinPath(plan.date_dir, "calib_imu_to_velo.txt"), TextOf([&](std::ostream& out) { WriteRigid(out, rig.velo_from_imu); })},
+      {JoinPath(plan.date_dir, "calib_velo_to_cam.txt"), TextOf([&](std::ostream& out) { WriteRigid(out, rig.cam0_from_velo); })},
+      {JoinPath(plan.date_dir, "calib_cam_to_cam.txt"),
+       CamToCamText(plan.left, plan.right, rig, options.distortion, camera.baseline)}};
+  return plan;
+}
+
+// Throws when the drive may not be written (see WriteKittiRawDrive's header comment); writes nothing.
+void CheckDrivePlan(const DrivePlan& plan, const KittiRawDriveOptions& options) {
+  namespace fs = std::filesystem;
+  const bool drive_is_simulated = fs::exists(plan.marker);
+  RequireCalibrationReplaceable(plan.date_dir, plan.drive_name, drive_is_simulated, plan.calibration);
+  if (fs::is_directory(plan.drive_dir) && !fs::is_empty(plan.drive_dir)) {
+    RequireFile(drive_is_simulated, plan.drive_dir,
+                "exists and was not written by `dvso simulate` (no " + std::string(kSimulatedDriveMarker) +
+                    "); not overwritten: choose another --raw-out");
+  }
+  if (options.extract) {  // throws when raw_margin leaves part of a rectified image outside the raw one
+    MakeDistortionWarp(plan.left, plan.rig, options.distortion);
+    MakeDistortionWarp(plan.right, plan.rig, options.distortion);
+  }
+}
+
+}  // namespace
+
+void CheckKittiRawDriveWritable(const std::string& raw_root, const KittiRawDriveOptions& options,
+                                const StereoCamera& camera) {
+  options.Check();
+  CheckDrivePlan(PlanDrive(raw_root, options, camera), options);
+}
+
 KittiRawDriveSummary WriteKittiRawDrive(const std::string& sequence_dir, const std::string& raw_root,
                                         const KittiRawDriveOptions& options, bool show_progress) {
   options.Check();
@@ -340,42 +404,22 @@ KittiRawDriveSummary WriteKittiRawDrive(const std::string& sequence_dir, const s
   RequireFile(static_cast<int>(poses.size()) == sequence->size(), JoinPath(sequence_dir, "poses.txt"),
               std::to_string(poses.size()) + " poses for " + std::to_string(sequence->size()) + " frames");
 
-  const StereoCamera& camera = sequence->camera();
-  RawCamera left;
-  left.K_rect << camera.left.fx, 0, camera.left.cx, 0, camera.left.fy, camera.left.cy, 0, 0, 1;
-  left.rect_size = cv::Size(camera.left.width, camera.left.height);
-  const int margin_x = static_cast<int>(std::lround(options.raw_margin * camera.left.width));
-  const int margin_y = static_cast<int>(std::lround(options.raw_margin * camera.left.height));
-  left.raw_size = options.extract ? cv::Size(camera.left.width + 2 * margin_x, camera.left.height + 2 * margin_y)
-                                  : left.rect_size;
-  left.K_raw = left.K_rect;
-  if (options.extract) left.K_raw(0, 2) += margin_x, left.K_raw(1, 2) += margin_y;
-  RawCamera right = left;
-  right.tx = -camera.left.fx * camera.baseline;
-  const KittiRawRig rig = KittiRawRig::KittiLike();
-
-  const char* flavour = options.extract ? "extract" : "sync";
-  char drive_name[64];
-  std::snprintf(drive_name, sizeof(drive_name), "%s_drive_%04d_%s", options.date.c_str(), options.drive, flavour);
-  const std::string date_dir = JoinPath(raw_root, options.date);
+  const DrivePlan plan = PlanDrive(raw_root, options, sequence->camera());
+  CheckDrivePlan(plan, options);
+  const RawCamera& left = plan.left;
+  const RawCamera& right = plan.right;
+  const KittiRawRig& rig = plan.rig;
+  const auto& calibration = plan.calibration;
   KittiRawDriveSummary summary;
-  summary.drive_dir = JoinPath(date_dir, drive_name);
+  summary.drive_dir = plan.drive_dir;
   summary.color = sequence->has_color();
   const int cameras = summary.color ? 4 : 2;
   namespace fs = std::filesystem;
-  const std::string marker = JoinPath(summary.drive_dir, kSimulatedDriveMarker);
-  const std::vector<std::pair<std::string, std::string>> calibration = {
-      {JoinPath(date_dir, "calib_imu_to_velo.txt"), TextOf([&](std::ostream& out) { WriteRigid(out, rig.velo_from_imu); })},
-      {JoinPath(date_dir, "calib_velo_to_cam.txt"), TextOf([&](std::ostream& out) { WriteRigid(out, rig.cam0_from_velo); })},
-      {JoinPath(date_dir, "calib_cam_to_cam.txt"), CamToCamText(left, right, rig, options.distortion, camera.baseline)}};
-  RequireCalibrationReplaceable(date_dir, drive_name, fs::exists(marker), calibration);
+  const std::string& marker = plan.marker;
   if (fs::is_directory(summary.drive_dir) && !fs::is_empty(summary.drive_dir)) {
-    RequireFile(fs::exists(marker), summary.drive_dir,
-                "exists and was not written by `dvso simulate` (no " + std::string(kSimulatedDriveMarker) +
-                    "); not overwritten: choose another --raw-out");
-    // An earlier simulation's drive: remove its frames and timestamps (a shorter or grey rerun would
-    // otherwise leave frames a reader takes for this drive's, and a run stopped halfway must still
-    // look incomplete: timestamps are written last).
+    // An earlier simulation's drive (CheckDrivePlan found its marker): remove its frames and timestamps
+    // (a shorter or grey rerun would otherwise leave frames a reader takes for this drive's, and a run
+    // stopped halfway must still look incomplete: timestamps are written last).
     for (const char* sensor : {"image_00", "image_01", "image_02", "image_03", "velodyne_points", "oxts"}) {
       const std::string sensor_dir = JoinPath(summary.drive_dir, sensor);
       RemoveFrameFiles(JoinPath(sensor_dir, "data"));

@@ -35,6 +35,8 @@
 #include <string>
 #include <vector>
 
+#include "core/camera.h"
+
 namespace dvso {
 
 // The sensor rig of a synthetic drive: KITTI-like mounting (IMU behind and below the Velodyne,
@@ -96,5 +98,11 @@ struct KittiRawDriveSummary {
 // date (real or simulated) reads it: a drive's calibration is never changed under it.
 KittiRawDriveSummary WriteKittiRawDrive(const std::string& sequence_dir, const std::string& raw_root,
                                         const KittiRawDriveOptions& options, bool show_progress = false);
+
+// The checks of WriteKittiRawDrive that need no frame (options, drive folder, date folder's calibration,
+// distortion margin) for a sequence whose calib.txt will read back as `camera`
+// (KittiCalibrationAsReadBack): `dvso simulate` runs them before rendering. Writes nothing.
+void CheckKittiRawDriveWritable(const std::string& raw_root, const KittiRawDriveOptions& options,
+                                const StereoCamera& camera);
 
 }  // namespace dvso

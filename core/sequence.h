@@ -105,5 +105,8 @@ StereoCamera ReadKittiCalibration(const std::string& calib_path, int width, int 
 // sequences, rather than another viewpoint (KITTI: 6 cm beside them).
 bool KittiColourMatchesGrey(const std::string& calib_path);
 void WriteKittiCalibration(const std::string& calib_path, const StereoCamera& camera);
+// `camera` as ReadKittiCalibration reads it back from the calib.txt WriteKittiCalibration writes for it
+// (12 significant digits): what a reader of a simulated sequence will see, known before it is written.
+StereoCamera KittiCalibrationAsReadBack(const StereoCamera& camera);
 
 }  // namespace dvso

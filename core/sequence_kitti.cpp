@@ -19,10 +19,9 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// Every "NAME: numbers" line of a calib.txt; P0..P3 must have 12 numbers.
-std::map<std::string, std::vector<double>> ReadCalibrationRows(const std::string& calib_path) {
-  std::ifstream in(calib_path);
-  RequireFile(in.good(), calib_path, "cannot open calibration file");
+// Every "NAME: numbers" line of a calib.txt read from `in` (`calib_path` names it in errors); P0..P3
+// must have 12 numbers.
+std::map<std::string, std::vector<double>> ParseCalibrationRows(std::istream& in, const std::string& calib_path) {
   std::map<std::string, std::vector<double>> rows;
   std::string line;
   int line_number = 0;
@@ -53,10 +52,27 @@ std::map<std::string, std::vector<double>> ReadCalibrationRows(const std::string
   return rows;
 }
 
-}  // namespace
+std::map<std::string, std::vector<double>> ReadCalibrationRows(const std::string& calib_path) {
+  std::ifstream in(calib_path);
+  RequireFile(in.good(), calib_path, "cannot open calibration file");
+  return ParseCalibrationRows(in, calib_path);
+}
 
-StereoCamera ReadKittiCalibration(const std::string& calib_path, int width, int height, CameraPair pair) {
-  std::map<std::string, std::vector<double>> rows = ReadCalibrationRows(calib_path);
+// The text WriteKittiCalibration writes: the grey pair (0, 1) and the colour pair (2, 3) share the
+// rectified geometry (the simulator renders both views of each pair from one camera).
+std::string KittiCalibrationText(const StereoCamera& camera) {
+  std::ostringstream out;
+  out << std::scientific << std::setprecision(12);
+  const auto& c = camera.left;
+  for (int i = 0; i < 4; ++i) {
+    const double tx = (i % 2 == 1) ? -c.fx * camera.baseline : 0.0;
+    out << "P" << i << ": " << c.fx << " 0 " << c.cx << " " << tx << " 0 " << c.fy << " " << c.cy << " 0 0 0 1 0\n";
+  }
+  return out.str();
+}
+
+StereoCamera CameraFromCalibrationRows(std::map<std::string, std::vector<double>> rows, const std::string& calib_path,
+                                       int width, int height, CameraPair pair) {
   const bool colour = pair == CameraPair::kColour;
   const std::string left_key = colour ? "P2" : "P0", right_key = colour ? "P3" : "P1";
   RequireFile(rows.count(left_key) == 1, calib_path,
@@ -86,6 +102,18 @@ StereoCamera ReadKittiCalibration(const std::string& calib_path, int width, int 
   return camera;
 }
 
+}  // namespace
+
+StereoCamera ReadKittiCalibration(const std::string& calib_path, int width, int height, CameraPair pair) {
+  return CameraFromCalibrationRows(ReadCalibrationRows(calib_path), calib_path, width, height, pair);
+}
+
+StereoCamera KittiCalibrationAsReadBack(const StereoCamera& camera) {
+  std::istringstream text(KittiCalibrationText(camera));
+  return CameraFromCalibrationRows(ParseCalibrationRows(text, "calib.txt"), "calib.txt", camera.left.width,
+                                   camera.left.height, CameraPair::kGrey);
+}
+
 bool KittiColourMatchesGrey(const std::string& calib_path) {
   std::map<std::string, std::vector<double>> rows = ReadCalibrationRows(calib_path);
   if (!rows.count("P0") || !rows.count("P2")) return false;
@@ -97,14 +125,8 @@ void WriteKittiCalibration(const std::string& calib_path, const StereoCamera& ca
   WriteAtomically(calib_path, [&](const std::string& temp) {
     std::ofstream out(temp);
     RequireFile(out.good(), calib_path, "cannot write calibration file");
-    out << std::scientific << std::setprecision(12);
-    const auto& c = camera.left;
-    for (int i = 0; i < 4; ++i) {
-      // Grey pair (0, 1) and colour pair (2, 3) share the rectified geometry here.
-      const double tx = (i % 2 == 1) ? -c.fx * camera.baseline : 0.0;
-      out << "P" << i << ": " << c.fx << " 0 " << c.cx << " " << tx << " 0 " << c.fy << " " << c.cy
-          << " 0 0 0 1 0\n";
-    }
+    out << KittiCalibrationText(camera);
+    RequireFile(out.good(), calib_path, "cannot write calibration file");
   });
 }
 

@@ -6,6 +6,7 @@
 #include "core/error.h"
 #include "core/fs_util.h"
 #include "core/kitti_raw_writer.h"
+#include "core/sequence.h"
 #include "core/simulator.h"
 #include "pipelines/commands.h"
 
@@ -77,12 +78,14 @@ void Run(SimulateArgs& args) {
             << "world       : seed " << o.seed << ", buildings " << o.scene.building_density << ", cars "
             << o.scene.car_density << ", trees " << o.scene.tree_density << ", shadows " << (o.scene.shadows ? "on" : "off")  << ", colour " << (o.color ? "on" : "off")
             << ", appearance " << args.appearance << ", threads " << o.num_threads << "\n";
+  const std::string raw_root = args.raw_out.empty() ? JoinPath(args.output_dir, "kitti_raw") : args.raw_out;
+  // A drive that may not be written fails now, not after minutes of rendering.
+  if (args.raw_layout != "none") CheckKittiRawDriveWritable(raw_root, args.raw, KittiCalibrationAsReadBack(o.camera));
   const SimulationSummary summary = WriteSimulatedSequence(o, args.output_dir, !args.quiet);
   std::cout << "wrote " << summary.frames << " frames (" << summary.path_length << " m) in " << summary.seconds
             << " s: " << summary.frames / std::max(summary.seconds, 1e-9) << " frames/s\n";
   if (args.raw_layout != "none") {
-    const std::string root = args.raw_out.empty() ? JoinPath(args.output_dir, "kitti_raw") : args.raw_out;
-    const KittiRawDriveSummary raw = WriteKittiRawDrive(args.output_dir, root, args.raw, !args.quiet);
+    const KittiRawDriveSummary raw = WriteKittiRawDrive(args.output_dir, raw_root, args.raw, !args.quiet);
     std::cout << "raw drive   : " << raw.drive_dir << " (" << raw.frames << " frames, " << raw.right_dropped
               << " dropped by the right camera" << (raw.color ? "s" : "") << ", "
               << raw.velodyne_points / std::max(raw.frames, 1) << " Velodyne points/scan, OXTS)\n";

@@ -62,6 +62,26 @@ std::string MakeKittiSequence(const std::string& name, int n, int w, int h) {
 
 }  // namespace
 
+// `dvso simulate` checks a raw drive's calibration before it writes calib.txt: the camera it checks with
+// must be, to the last bit, the one a reader gets back from that file (12 significant digits).
+TEST(KittiCalibration, AsReadBackIsWhatTheReaderReadsFromTheWrittenFile) {
+  const std::string root = TempDir("kitti_calib_read_back");
+  StereoCamera cam;
+  cam.left = PinholeCamera{718.856 * 160.0 / 1241.0, 718.856 / 3.0, 607.1928 / 7.0, 185.2157 / 3.0, 160, 64};
+  cam.baseline = 0.54 / 3.0;
+  WriteKittiCalibration(root + "/calib.txt", cam);
+  const StereoCamera read = ReadKittiCalibration(root + "/calib.txt", 160, 64);
+  const StereoCamera predicted = KittiCalibrationAsReadBack(cam);
+  EXPECT_EQ(predicted.left.fx, read.left.fx);
+  EXPECT_EQ(predicted.left.fy, read.left.fy);
+  EXPECT_EQ(predicted.left.cx, read.left.cx);
+  EXPECT_EQ(predicted.left.cy, read.left.cy);
+  EXPECT_EQ(predicted.baseline, read.baseline);
+  EXPECT_EQ(predicted.left.width, 160);
+  EXPECT_EQ(predicted.left.height, 64);
+  EXPECT_NE(read.baseline, cam.baseline) << "the file rounds: the test must not pass with the camera itself";
+}
+
 TEST(Camera, ResizeKeepsPixelCentres) {
   PinholeCamera cam{500, 400, 319.5, 239.5, 640, 480};
   const PinholeCamera half = cam.Resized(320, 240);

@@ -396,6 +396,7 @@ TEST(KittiRawSequence, ShorterRerunIntoTheSameDriveLeavesNoStaleFrames) {
   const testing::CliRun refused = testing::RunDvso("simulate --quiet --out " + dir + "/again --count 2" + common);
   EXPECT_NE(refused.exit_code, 0);
   EXPECT_NE(refused.out.find("not written by `dvso simulate`"), std::string::npos) << refused.out;
+  EXPECT_FALSE(fs::exists(dir + "/again/image_0")) << "refused before rendering";
   EXPECT_EQ(count(drive / "image_00/data"), 3);
 }
 
@@ -422,6 +423,7 @@ TEST(KittiRawSequence, CalibrationOfTheDateFolderIsNeverChangedUnderAnotherDrive
   EXPECT_NE(refused.out.find("2011_09_26_drive_0002_sync"), std::string::npos) << refused.out;
   EXPECT_NE(refused.out.find("calib_cam_to_cam.txt"), std::string::npos) << refused.out;
   EXPECT_EQ(read(date / "calib_cam_to_cam.txt"), real);
+  EXPECT_FALSE(fs::exists(dir + "/a/image_0")) << "refused before rendering";
 
   // Simulated drives only: a second drive of the same camera shares the calibration, one of another
   // camera (baseline) is refused, and the first drive's calibration stays.
@@ -436,6 +438,7 @@ TEST(KittiRawSequence, CalibrationOfTheDateFolderIsNeverChangedUnderAnotherDrive
                                                         "--raw-out " + sim_root + common);
   EXPECT_NE(other_camera.exit_code, 0);
   EXPECT_NE(other_camera.out.find("2011_09_26_drive_0001_sync"), std::string::npos) << other_camera.out;
+  EXPECT_FALSE(fs::exists(dir + "/d/image_0")) << "refused before rendering";
   EXPECT_EQ(read(sim_date / "calib_cam_to_cam.txt"), first);
   // The only drive of a date, rerun with another camera, takes its calibration along.
   const std::string alone = dir + "/alone";
