@@ -168,9 +168,7 @@ void WriteNpyStack(const std::string& path, const std::vector<cv::Mat>& maps) {
   const size_t total = 10 + header.size() + 1;
   header.append((64 - total % 64) % 64, ' ');
   header.push_back('\n');
-  WriteAtomically(path, [&](const std::string& temp) {
-    std::ofstream out(temp, std::ios::binary);
-    RequireFile(out.good(), path, "cannot write .npy file");
+  WriteStreamAtomically(path, [&](std::ostream& out) {
     out.write("\x93NUMPY\x01\x00", 8);
     const uint16_t len = static_cast<uint16_t>(header.size());
     const char len_bytes[2] = {static_cast<char>(len & 0xff), static_cast<char>(len >> 8)};
@@ -179,8 +177,7 @@ void WriteNpyStack(const std::string& path, const std::vector<cv::Mat>& maps) {
     for (const auto& m : maps) {
       for (int y = 0; y < h; ++y) out.write(reinterpret_cast<const char*>(m.ptr<float>(y)), sizeof(float) * w);
     }
-    RequireFile(out.good(), path, "error while writing .npy file");
-  });
+  }, /*binary=*/true);
 }
 
 }  // namespace dvso

@@ -2,6 +2,7 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <system_error>
 #include <vector>
 
@@ -30,6 +31,17 @@ void WriteAtomically(const std::string& path,
     fs::remove(temp, ec);
     throw Error(path, "cannot move the finished file into place");
   }
+}
+
+void WriteStreamAtomically(const std::string& path, const std::function<void(std::ostream&)>& write,
+                           bool binary) {
+  WriteAtomically(path, [&](const std::string& temp) {
+    std::ofstream out(temp, binary ? std::ios::out | std::ios::binary : std::ios::out);
+    RequireFile(out.is_open(), path, "cannot create the file");
+    write(out);
+    out.close();  // flushes: the last buffered bytes are written only here
+    RequireFile(!out.fail(), path, "write failed (disk full?)");
+  });
 }
 
 bool IsUnfinishedAtomicWrite(const std::filesystem::path& path) {

@@ -14,6 +14,13 @@ namespace dvso {
 // path's stem + kAtomicWriteTag + its extension, in the same folder.
 void WriteAtomically(const std::string& path, const std::function<void(const std::string&)>& write);
 
+// WriteAtomically for a file written through a stream: opens the temporary file (binary when
+// asked), runs write(stream), then closes it and checks the close. An ofstream buffers the last few
+// KB until close(), so a full disk or a file-size limit shows only there; checking before it would
+// rename a truncated file into place. Errors name `path`, never the temporary file.
+void WriteStreamAtomically(const std::string& path, const std::function<void(std::ostream&)>& write,
+                           bool binary = false);
+
 inline constexpr const char* kAtomicWriteTag = ".tmp-writing";
 
 // True for the temporary file of a WriteAtomically that a killed process left

@@ -35,13 +35,11 @@ OxtsPacket ReadOxtsPacket(const std::string& path) {
 }
 
 void WriteOxtsPacket(const std::string& path, const OxtsPacket& packet) {
-  WriteAtomically(path, [&](const std::string& tmp) {
-    std::ofstream out(tmp);
+  WriteStreamAtomically(path, [&](std::ostream& out) {
     out << std::setprecision(17) << packet.lat << ' ' << packet.lon << ' ' << packet.alt << ' ' << packet.roll << ' '
         << packet.pitch << ' ' << packet.yaw;
     for (int i = 6; i < kOxtsValues; ++i) out << " 0";
     out << '\n';
-    RequireFile(out.good(), path, "write failed");
   });
 }
 

@@ -75,12 +75,7 @@ std::string TextOf(const std::function<void(std::ostream&)>& body) {
 }
 
 void WriteText(const std::string& path, const std::string& text) {
-  WriteAtomically(path, [&](const std::string& temp) {
-    std::ofstream out(temp);
-    RequireFile(out.good(), path, "cannot write file");
-    out << text;
-    RequireFile(out.good(), path, "write failed");
-  });
+  WriteStreamAtomically(path, [&](std::ostream& out) { out << text; });
 }
 
 void WriteText(const std::string& path, const std::function<void(std::ostream&)>& body) {

@@ -54,12 +54,13 @@ std::vector<VelodynePoint> ReadVelodyneScan(const std::string& path) {
 }
 
 void WriteVelodyneScan(const std::string& path, const std::vector<VelodynePoint>& points) {
-  WriteAtomically(path, [&](const std::string& tmp) {
-    std::ofstream out(tmp, std::ios::binary);
-    out.write(reinterpret_cast<const char*>(points.data()),
-              static_cast<std::streamsize>(points.size() * kFloatsPerPoint * sizeof(float)));
-    RequireFile(out.good(), path, "write failed");
-  });
+  WriteStreamAtomically(
+      path,
+      [&](std::ostream& out) {
+        out.write(reinterpret_cast<const char*>(points.data()),
+                  static_cast<std::streamsize>(points.size() * kFloatsPerPoint * sizeof(float)));
+      },
+      /*binary=*/true);
 }
 
 VelodyneProjection ReadVelodyneProjection(const std::string& calib_dir, int camera) {

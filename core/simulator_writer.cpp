@@ -39,12 +39,7 @@ void WritePng(const std::string& path, const cv::Mat& image) {
 }
 
 void WriteText(const std::string& path, const std::function<void(std::ostream&)>& body) {
-  WriteAtomically(path, [&](const std::string& temp) {
-    std::ofstream out(temp);
-    RequireFile(out.good(), path, "cannot write file");
-    body(out);
-    RequireFile(out.good(), path, "write failed");
-  });
+  WriteStreamAtomically(path, body);
 }
 
 void WriteSimulationYaml(const std::string& path, const StreetSimulator& simulator, const SimulationSummary& summary) {

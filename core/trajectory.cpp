@@ -89,9 +89,7 @@ Trajectory ReadTrajectory(const std::string& path, TrajectoryFormat format,
 }
 
 void WriteKittiTrajectory(const std::string& path, const Trajectory& trajectory) {
-  WriteAtomically(path, [&](const std::string& temp) {
-    std::ofstream out(temp);
-    RequireFile(out.good(), path, "cannot write trajectory");
+  WriteStreamAtomically(path, [&](std::ostream& out) {
     out << std::setprecision(12);
     for (const auto& p : trajectory.poses) {
       const Eigen::Matrix3d R = p.T_world_camera.linear();
@@ -100,14 +98,11 @@ void WriteKittiTrajectory(const std::string& path, const Trajectory& trajectory)
         out << R(r, 0) << ' ' << R(r, 1) << ' ' << R(r, 2) << ' ' << t(r) << (r < 2 ? ' ' : '\n');
       }
     }
-    RequireFile(out.good(), path, "error while writing trajectory");
   });
 }
 
 void WriteTumTrajectory(const std::string& path, const Trajectory& trajectory) {
-  WriteAtomically(path, [&](const std::string& temp) {
-    std::ofstream out(temp);
-    RequireFile(out.good(), path, "cannot write trajectory");
+  WriteStreamAtomically(path, [&](std::ostream& out) {
     out << std::setprecision(12);
     for (const auto& p : trajectory.poses) {
       const Eigen::Quaterniond q(p.T_world_camera.linear());
@@ -118,7 +113,6 @@ void WriteTumTrajectory(const std::string& path, const Trajectory& trajectory) {
           << ' ' << t.x() << ' ' << t.y() << ' ' << t.z() << ' ' << q.x() << ' '
           << q.y() << ' ' << q.z() << ' ' << q.w() << '\n';
     }
-    RequireFile(out.good(), path, "error while writing trajectory");
   });
 }
 

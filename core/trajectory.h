@@ -32,7 +32,7 @@ struct Trajectory {
 Trajectory ReadTrajectory(const std::string& path, TrajectoryFormat format = TrajectoryFormat::kAuto,
                           const std::vector<double>* times = nullptr);
 
-// Writes atomically (temporary file + rename). Full double precision.
+// Writes atomically (temporary file + rename), 12 significant digits (TUM timestamps: 9 decimals).
 void WriteKittiTrajectory(const std::string& path, const Trajectory& trajectory);
 void WriteTumTrajectory(const std::string& path, const Trajectory& trajectory);
 

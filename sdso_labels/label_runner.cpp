@@ -278,11 +278,7 @@ LabelRunSummary RunLabelExtraction(const std::string& sequence_dir, const std::s
                 std::to_string(end - options.first) + " frames");
   }
   const std::string json_path = JoinPath(out_dir, "labels_summary.json");
-  WriteAtomically(json_path, [&](const std::string& temp) {
-    std::ofstream out(temp);
-    out << summary.ToJson().dump(2) << "\n";
-    RequireFile(out.good(), json_path, "cannot write summary");
-  });
+  WriteStreamAtomically(json_path, [&](std::ostream& out) { out << summary.ToJson().dump(2) << "\n"; });
   return summary;
 }
 

@@ -190,11 +190,7 @@ std::string Trainer::StageCheckpointPath(int stage) const {
 TrainResult Trainer::Run(const std::string& resume_checkpoint) {
   const TrainOptions& train = config_.train;
   EnsureDirectory(train.output_dir);
-  WriteAtomically(JoinPath(train.output_dir, "config.yaml"), [&](const std::string& temp) {
-    std::ofstream out(temp);
-    out << config_yaml_;
-    RequireFile(out.good(), temp, "cannot write the training config");
-  });
+  WriteStreamAtomically(JoinPath(train.output_dir, "config.yaml"), [&](std::ostream& out) { out << config_yaml_; });
   TrainResult result;
   CheckpointInfo info;
   info.config_yaml = config_yaml_;

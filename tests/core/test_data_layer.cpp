@@ -1,7 +1,10 @@
 // Unit tests of the data layer: cameras, trajectories, maps, sequence readers, strict YAML.
 #include <gtest/gtest.h>
 
+#include <sys/resource.h>
+
 #include <cmath>
+#include <csignal>
 #include <filesystem>
 #include <fstream>
 #include <tuple>
@@ -205,13 +208,48 @@ TEST(DisparityIo, KittiPngRoundTripQuantisesTo1Over256) {
   EXPECT_FALSE(IsUnfinishedAtomicWrite("out/tmp-writing.png"));
   EXPECT_FALSE(IsUnfinishedAtomicWrite("out/INTERRUPTED"));
   // NormalizedFolderPath: the folder's own name whatever the spelling.
-  for (const std::string spelling : {dir, dir + "/", dir + "/.", dir + "/../" + fs::path(dir).filename().string()}) {
+  for (const std::string& spelling : {dir, dir + "/", dir + "/.", dir + "/../" + fs::path(dir).filename().string()}) {
     EXPECT_EQ(NormalizedFolderPath(spelling).filename(), fs::path(dir).filename()) << spelling;
   }
   EXPECT_EQ(NormalizedFolderPath(".").filename(), fs::current_path().filename());
   // An 8-bit PNG is not a KITTI map.
   cv::imwrite(dir + "/eight.png", cv::Mat(3, 3, CV_8U, cv::Scalar(7)));
   EXPECT_THROW(ReadKittiMapPng(dir + "/eight.png"), Error);
+}
+
+// An ofstream holds the last few KB until close(): a full disk (here a file-size limit) shows only
+// there. A writer that checked the stream before closing renamed a truncated trajectory into place.
+TEST(FsUtil, WriteThatFailsAtCloseLeavesNoFile) {
+  const std::string dir = TempDir("atomic_close_failure");
+  Trajectory trajectory;
+  for (int i = 0; i < 20; ++i) {
+    StampedPose pose;
+    pose.timestamp = 0.1 * i;
+    pose.T_world_camera.translation() = Eigen::Vector3d(0.1 * i, 0.0, 1.0 * i);
+    trajectory.poses.push_back(pose);
+  }
+  struct rlimit saved;
+  ASSERT_EQ(getrlimit(RLIMIT_FSIZE, &saved), 0);
+  void (*previous)(int) = std::signal(SIGXFSZ, SIG_IGN);  // EFBIG instead of the signal
+  struct rlimit limited = saved;
+  limited.rlim_cur = 512;  // bytes: 20 poses need ~2 KB, all of it still in the stream's buffer
+  ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &limited), 0);
+  bool threw = false;
+  try {
+    WriteKittiTrajectory(dir + "/trajectory.txt", trajectory);
+  } catch (const Error& e) {
+    threw = true;
+    EXPECT_NE(std::string(e.what()).find(dir + "/trajectory.txt"), std::string::npos) << e.what();
+    EXPECT_EQ(std::string(e.what()).find(kAtomicWriteTag), std::string::npos) << "names the temporary file";
+  }
+  setrlimit(RLIMIT_FSIZE, &saved);
+  std::signal(SIGXFSZ, previous);
+  EXPECT_TRUE(threw);
+  EXPECT_FALSE(fs::exists(dir + "/trajectory.txt"));
+  EXPECT_FALSE(fs::exists(dir + "/trajectory.tmp-writing.txt"));
+  // Without the limit the same call writes every pose.
+  WriteKittiTrajectory(dir + "/trajectory.txt", trajectory);
+  EXPECT_EQ(ReadTrajectory(dir + "/trajectory.txt", TrajectoryFormat::kKitti).size(), 20u);
 }
 
 TEST(DisparityIo, RealKitti2015GroundTruthReads) {

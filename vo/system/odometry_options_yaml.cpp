@@ -192,12 +192,7 @@ std::string OdometryOptionsToYaml(const OdometryOptions& options) {
 
 void SaveOdometryOptions(const std::string& path, const OdometryOptions& options) {
   const std::string text = OdometryOptionsToYaml(options);
-  WriteAtomically(path, [&text](const std::string& temp_path) {
-    std::ofstream out(temp_path);
-    RequireFile(out.good(), temp_path, "cannot write config");
-    out << text;
-    RequireFile(out.good(), temp_path, "write failed");
-  });
+  WriteStreamAtomically(path, [&text](std::ostream& out) { out << text; });
 }
 
 }  // namespace dvso::vo

@@ -120,17 +120,15 @@ void PlyPointWriter::OnPointsMarginalized(const std::vector<PointInfo>& points) 
 }
 
 void PlyPointWriter::OnFinished() {
-  body_.close();
-  WriteAtomically(path_, [this](const std::string& temp) {
-    std::ofstream out(temp);
-    RequireFile(out.good(), temp, "cannot write point cloud");
+  body_.close();  // flushes the last points: a failure here would leave the header's count above the body's
+  RequireFile(!body_.fail(), path_, "write failed (disk full?)");
+  WriteStreamAtomically(path_, [this](std::ostream& out) {
     out << "ply\nformat ascii 1.0\nelement vertex " << count_
         << "\nproperty float x\nproperty float y\nproperty float z\nend_header\n";
     if (count_ > 0) {
       std::ifstream body(body_path_);
       out << body.rdbuf();
     }
-    RequireFile(out.good(), temp, "write failed");
   });
   std::remove(body_path_.c_str());
 }

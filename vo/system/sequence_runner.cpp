@@ -142,11 +142,9 @@ SequenceRunSummary RunOdometryOnSequence(const SequenceReader& sequence, const O
   // The marker of an earlier interrupted run goes only now that this run's files replace its partial ones: a
   // run that fails before this point leaves those files marked.
   if (summary.interrupted) {
-    WriteAtomically(JoinPath(out_dir, "INTERRUPTED"), [&](const std::string& temp) {
-      std::ofstream marker(temp);
+    WriteStreamAtomically(JoinPath(out_dir, "INTERRUPTED"), [&](std::ostream& marker) {
       marker << "interrupted after " << summary.frames << " of " << end - run.first
              << " frames; trajectory.txt, trajectory_tum.txt and run_log.csv hold those frames\n";
-      RequireFile(marker.good(), temp, "cannot write the interruption marker");
     });
   } else {
     std::filesystem::remove(JoinPath(out_dir, "INTERRUPTED"));
