@@ -31,11 +31,11 @@ void AddExportCommand(CLI::App& app) {
                 "Export untrained weights (latency benchmarks; give the training camera for `odometry --model`)");
   cmd->add_option("--out", args->out, "Output TorchScript file (.pt)")->required();
   cmd->add_option("--training-baseline", args->options.training_baseline,
-                  "Training camera baseline in metres (default: read from the checkpoint config's sequences; "
+                  "Training camera baseline in metres (default: read from the first sequence its stages trained on; "
                   "--random-init: none)")
       ->check(NonNegative());
   cmd->add_option("--training-fx-over-width", args->options.training_fx_over_width,
-                  "Training camera f_x / image width (default: read from the checkpoint config's sequences; "
+                  "Training camera f_x / image width (default: read from the first sequence its stages trained on; "
                   "--random-init: none)")
       ->check(NonNegative());
   cmd->add_option("--stamp", args->stamp,

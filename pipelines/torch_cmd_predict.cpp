@@ -88,8 +88,14 @@ void RunPredict(const PredictArgs& args) {
     WriteKittiMapPng(JoinPath(JoinPath(args.out, "left"), name), pair.left);
     WriteKittiMapPng(JoinPath(JoinPath(args.out, "right"), name), pair.right);
     if (!args.no_color) {
-      cv::imwrite(JoinPath(JoinPath(args.out, "left_color"), name), stacknet::ColorizeDisparity(pair.left));
-      cv::imwrite(JoinPath(JoinPath(args.out, "right_color"), name), stacknet::ColorizeDisparity(pair.right));
+      // Like the maps: a full disk is an error, and a killed run never leaves a truncated preview in place.
+      for (const bool left : {true, false}) {
+        const std::string path = JoinPath(JoinPath(args.out, left ? "left_color" : "right_color"), name);
+        const cv::Mat preview = stacknet::ColorizeDisparity(left ? pair.left : pair.right);
+        WriteAtomically(path, [&](const std::string& temp) {
+          RequireFile(cv::imwrite(temp, preview), path, "cannot write the preview PNG");
+        });
+      }
     } else {
       // A preview of this name from an earlier run no longer shows this map: remove it, not leave it beside.
       for (const char* sub : {"left_color", "right_color"}) {

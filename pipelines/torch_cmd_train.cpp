@@ -32,9 +32,9 @@ struct TrainArgs {
 void RunTrain(const TrainArgs& args) {
   stacknet::StackNetConfig config = stacknet::LoadConfig(args.config, /*check=*/false);
   if (!args.output_dir.empty()) config.train.output_dir = args.output_dir;
-  if (!args.sequences.empty()) config.data.sequences = args.sequences;
   if (!args.init_from.empty()) config.train.init_from = args.init_from;
   try {
+    if (!args.sequences.empty()) stacknet::SetDefaultSequences(&config, args.sequences);
     config.Check();
   } catch (const Error& e) {
     throw Error(args.config, e.what());
@@ -74,7 +74,9 @@ void AddTrainCommand(CLI::App& app) {
   auto* cmd = app.add_subcommand("train", "Train SimpleNet / StackNet from a YAML config (paper 3, 5.1)");
   cmd->add_option("--config", args->config, "YAML config (see configs/stacknet_*.yaml)")->required()->check(CLI::ExistingFile);
   cmd->add_option("--output-dir", args->output_dir, "Override train.output_dir");
-  cmd->add_option("--sequence", args->sequences, "Override data.sequences (repeatable)");
+  cmd->add_option("--sequence", args->sequences,
+                  "Train the stages that use the default data on this sequence instead (replaces data.sequences "
+                  "and data.split_file; repeatable; an error when every stage names a dataset)");
   cmd->add_flag("--resume", args->resume, "Continue from <output_dir>/checkpoint_last.pt");
   cmd->add_option("--resume-from", args->resume_from, "Continue from this checkpoint")->check(CLI::ExistingFile);
   cmd->add_option("--init-from", args->init_from,

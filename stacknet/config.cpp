@@ -6,7 +6,9 @@
 #include <fstream>
 #include <set>
 #include <sstream>
+#include <type_traits>
 
+#include "core/config_yaml.h"
 #include "core/error.h"
 
 namespace dvso::stacknet {
@@ -22,6 +24,10 @@ class StrictMap {
   void Get(const std::string& key, T* value) {
     seen_.insert(key);
     if (!node_ || node_.IsNull() || !node_[key]) return;
+    // yaml-cpp reads an empty value (`output_dir:` or `~`) as the string "null": a forgotten value must
+    // neither become that folder nor silently mean the default (as core/config_yaml.h YamlSection::Read).
+    Require(!node_[key].IsNull(), where_ + "." + key + ": has no value (give one, or remove the key for the default)");
+    if constexpr (std::is_integral_v<T> && !std::is_same_v<T, bool>) RequireDecimalInteger(node_[key], "", where_ + "." + key);
     try {
       *value = node_[key].as<T>();
     } catch (const YAML::Exception& e) {
@@ -204,7 +210,9 @@ StackNetConfig FromNode(const YAML::Node& root, const std::string& origin, bool 
 
 YAML::Node ParseYaml(const std::string& yaml_text, const std::string& origin) {
   try {
-    return YAML::Load(yaml_text);
+    YAML::Node root = YAML::Load(yaml_text);
+    RequireUniqueKeys(root, origin);
+    return root;
   } catch (const YAML::Exception& e) {
     throw Error(origin, std::string("YAML parse error: ") + e.what());
   }
@@ -268,6 +276,21 @@ StackNetConfig ParseConfig(const std::string& yaml_text, const std::string& orig
 
 StackNetConfig LoadConfig(const std::string& path, bool check) {
   return FromNode(LoadResolvedYaml(path, 0), path, check);
+}
+
+void SetDefaultSequences(StackNetConfig* config, const std::vector<std::string>& sequences) {
+  std::string datasets;  // the named datasets the stages use, when none uses the default data
+  bool default_used = config->stages.empty();  // no stages: Check() says so
+  for (const StageOptions& stage : config->stages) {
+    default_used = default_used || stage.data.empty();
+    if (!stage.data.empty() && datasets.find("'" + stage.data + "'") == std::string::npos) {
+      datasets += (datasets.empty() ? "'" : ", '") + stage.data + "'";
+    }
+  }
+  Require(default_used, "--sequence replaces data.sequences, but no stage trains on `data:` (the stages use "
+                        "dataset(s) " + datasets + "): set their sequences in the config instead");
+  config->data.sequences = sequences;
+  config->data.split_file.clear();
 }
 
 std::string ConfigToYaml(const StackNetConfig& config) {

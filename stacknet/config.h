@@ -6,6 +6,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "stacknet/options.h"
 
@@ -16,6 +17,11 @@ namespace dvso::stacknet {
 StackNetConfig LoadConfig(const std::string& path, bool check = true);
 // Same from YAML text (`origin` names the source in errors).
 StackNetConfig ParseConfig(const std::string& yaml_text, const std::string& origin = "<config>", bool check = true);
+// `dvso train --sequence DIR...`: the default data trains on `sequences` instead of
+// its own (data.sequences replaced, data.split_file cleared: a split would win).
+// An error naming the stages' datasets when no stage trains on the default data,
+// where the sequences would go unused (and the export would take their camera).
+void SetDefaultSequences(StackNetConfig* config, const std::vector<std::string>& sequences);
 // The full config (all fields, defaults included) as YAML; printed at start
 // and stored in checkpoints so that export/predict rebuild the same network.
 std::string ConfigToYaml(const StackNetConfig& config);

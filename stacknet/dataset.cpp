@@ -88,6 +88,26 @@ std::unique_ptr<SequenceReader> OpenTrainingSequence(const std::string& root) {
   return OpenSequence(root, "", pair);
 }
 
+namespace {
+// Folder of a split line's drive: absolute as written, else under split_root (default: the split file's folder).
+std::string SplitDriveRoot(const DataOptions& options, const std::string& drive) {
+  if (fs::path(drive).is_absolute()) return drive;
+  const fs::path base =
+      options.split_root.empty() ? fs::path(options.split_file).parent_path() : fs::path(options.split_root);
+  return (base / drive).string();
+}
+}  // namespace
+
+std::vector<std::string> TrainingSequenceRoots(const DataOptions& options) {
+  if (options.split_file.empty()) return options.sequences;
+  std::vector<std::string> roots;
+  for (const SplitEntry& entry : ReadSplitFile(options.split_file)) {
+    const std::string root = SplitDriveRoot(options, entry.drive);
+    if (std::find(roots.begin(), roots.end(), root) == roots.end()) roots.push_back(root);
+  }
+  return roots;
+}
+
 StereoDataset::StereoDataset(const DataOptions& options, int network_width, int network_height)
     : options_(options), width_(network_width), height_(network_height) {
   options_.Check();
@@ -103,12 +123,11 @@ StereoDataset::StereoDataset(const DataOptions& options, int network_width, int 
 }
 
 void StereoDataset::AddSplit(const std::string& split_file) {
-  const fs::path base = options_.split_root.empty() ? fs::path(split_file).parent_path() : fs::path(options_.split_root);
   // Split frames are file numbers ("0000000069"); a reader's index differs from it where
   // cameras dropped frames (extract drives), so look the number up among the frame names.
   std::vector<std::map<long long, int>> index_of_number;
   for (const SplitEntry& entry : ReadSplitFile(split_file)) {
-    const std::string root = fs::path(entry.drive).is_absolute() ? entry.drive : (base / entry.drive).string();
+    const std::string root = SplitDriveRoot(options_, entry.drive);
     const int seq = AddSequence(root);
     if (static_cast<int>(index_of_number.size()) <= seq) index_of_number.resize(seq + 1);
     std::map<long long, int>& numbers = index_of_number[seq];

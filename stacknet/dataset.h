@@ -38,6 +38,11 @@ cv::Mat SampleSparse(const cv::Mat& dense, double fraction, uint64_t seed);
 // open sequences here, so the model's metadata names the pair it saw.
 std::unique_ptr<SequenceReader> OpenTrainingSequence(const std::string& root);
 
+// The sequence folders a dataset trains on, in order of first use, as StereoDataset
+// opens them: `sequences`, or the drives of `split_file` (read here; errors name it)
+// under `split_root` (default: the split file's folder).
+std::vector<std::string> TrainingSequenceRoots(const DataOptions& options);
+
 // Stereo pairs from the core sequence readers (KITTI odometry layout, the
 // simulator, KITTI raw drives through their colour pair 02/03, rectified on read
 // for _extract drives), all frames of `sequences` or the lines of `split_file`.

@@ -3,6 +3,7 @@
 #include <torch/csrc/jit/frontend/tracer.h>
 
 #include <algorithm>
+#include <filesystem>
 #include <map>
 #include <sstream>
 
@@ -15,6 +16,7 @@
 #include "stacknet/warping.h"
 
 namespace dvso::stacknet {
+namespace fs = std::filesystem;
 
 void ExportOptions::Check() const {
   Require(model == "auto" || model == "simple" || model == "stack", "export model must be auto, simple or stack");
@@ -23,18 +25,25 @@ void ExportOptions::Check() const {
 
 bool TrainingCameraFromConfig(const std::string& config_yaml, double* baseline, double* fx_over_width) {
   const StackNetConfig config = ParseConfig(config_yaml, "(embedded config)");
-  std::vector<std::string> sequences = config.data.sequences;
-  for (const auto& [name, data] : config.datasets) sequences.insert(sequences.end(), data.sequences.begin(), data.sequences.end());
-  for (const std::string& path : sequences) {
-    try {
+  // The data the stages trained on, in stage order (config.data only where a stage used it: a
+  // config's default sequences may be a camera the model never saw).
+  std::vector<const DataOptions*> used;
+  for (const StageOptions& stage : config.stages) {
+    const DataOptions* data = &config.DataFor(stage);
+    if (std::find(used.begin(), used.end(), data) == used.end()) used.push_back(data);
+  }
+  for (const DataOptions* data : used) {
+    // A split file or sequence that is not on this machine any more is skipped; one that is here but
+    // cannot be read (a corrupt calibration) is an error, not a reason to take another sequence's camera.
+    if (!data->split_file.empty() && !fs::exists(data->split_file)) continue;
+    for (const std::string& path : TrainingSequenceRoots(*data)) {
+      if (!fs::exists(path)) continue;
       const std::unique_ptr<SequenceReader> sequence = OpenTrainingSequence(path);
       const StereoCamera& cam = sequence->camera();
       if (!(cam.baseline > 0)) continue;
       *baseline = cam.baseline;
       *fx_over_width = cam.left.fx / cam.left.width;
       return true;
-    } catch (const Error&) {
-      continue;  // not on this machine any more: try the next one
     }
   }
   return false;
@@ -254,9 +263,9 @@ std::string ExportCheckpoint(const std::string& checkpoint_path, const std::stri
       if (!(metadata.fx_over_width > 0)) metadata.fx_over_width = fx_over_width;
     }
   }
-  Require(metadata.has_camera(), checkpoint_path +
-                                     ": training camera unknown (its sequences are gone): pass --training-baseline "
-                                     "and --training-fx-over-width");
+  Require(metadata.has_camera(),
+          checkpoint_path + ": training camera unknown (none of the sequences its stages trained on is on this "
+                            "machine): pass --training-baseline and --training-fx-over-width");
   return SaveTraced(model, use_residual, config.network, metadata, out_path);
 }
 

@@ -42,15 +42,17 @@ inline constexpr const char* kModelMetadataFile = "dvso_metadata.json";
 
 struct ExportOptions {
   std::string model = "auto";  // auto (as trained: stack if ResidualNet was trained) | simple | stack
-  double training_baseline = 0;       // training camera baseline (m); 0 = from the config's first readable sequence
+  double training_baseline = 0;       // training camera baseline (m); 0 = from TrainingCameraFromConfig
   double training_fx_over_width = 0;  // training camera f_x / width; 0 = from the same sequence
   std::string config_name;            // training config's name; "" = the checkpoint's (random init: none)
   void Check() const;
 };
 
-// The training camera of a config: the first of its sequences (default data,
-// then named datasets) that can be opened, through the pair training reads
-// (OpenTrainingSequence: a raw drive's colour pair). False when none can.
+// The training camera of a config: the first sequence its stages trained on
+// (DataFor of each stage, in stage order: `sequences` or a split file's drives)
+// that is on this machine, through the pair training reads (OpenTrainingSequence:
+// a raw drive's colour pair). Sequences and split files that do not exist are
+// skipped (false when none is left); one that exists but cannot be read throws.
 bool TrainingCameraFromConfig(const std::string& config_yaml, double* baseline, double* fx_over_width);
 
 // torch::jit::load with the one error every command gives for a file that is not

@@ -1,6 +1,7 @@
 #include "stacknet/options.h"
 
 #include <cmath>
+#include <string>
 
 #include "core/error.h"
 
@@ -32,6 +33,11 @@ void DataOptions::Check() const {
   Require(!sequences.empty() || !split_file.empty(), "data: give `sequences` or `split_file`");
   Require(gt_sample_fraction > 0 && gt_sample_fraction <= 1, "data.gt_sample_fraction must be in (0, 1]");
   Require(frame_step >= 1, "data.frame_step must be >= 1");
+  // A split lists its frames itself; StereoDataset reads every line of it and would ignore the step.
+  Require(split_file.empty() || frame_step == 1,
+          "data.frame_step (" + std::to_string(frame_step) +
+              ") applies to `sequences` only; a split_file lists its frames: set frame_step to 1 (named datasets "
+              "inherit it from data:)");
 }
 
 void AugmentOptions::Check() const {
@@ -92,7 +98,13 @@ void StackNetConfig::Check() const {
     }
   }
   if (default_data_needed) data.Check();
-  for (const auto& [name, options] : datasets) options.Check();
+  for (const auto& [name, options] : datasets) {
+    try {
+      options.Check();
+    } catch (const Error& e) {
+      throw Error("datasets." + name + ": " + e.what());  // which of the datasets
+    }
+  }
 }
 
 const DataOptions& StackNetConfig::DataFor(const StageOptions& stage) const {

@@ -7,6 +7,7 @@
 #include <fstream>
 #include <iomanip>
 #include <iostream>
+#include <memory>
 #include <sstream>
 #include <utility>
 
@@ -166,6 +167,44 @@ std::ofstream OpenEpochLog(const std::string& path, const TrainingPosition& resu
   return out;
 }
 
+// A resume inside a stage continues its epoch order (train.seed), its batches (train.batch_size) and its
+// frames (the stage's data) where the checkpoint stopped: with other values the resumed batches would not be
+// the interrupted run's, and nothing would say so. At a stage boundary the next stage starts afresh, so those
+// may change there (e.g. new settings for the StackNet stages after a SimpleNet stage's checkpoint).
+void RequireSameBatchesOnResume(const StackNetConfig& saved, const StackNetConfig& current, const TrainingPosition& at,
+                                const std::string& checkpoint) {
+  const bool inside_stage = (at.epoch > 0 || at.batch > 0) && at.stage < static_cast<int>(current.stages.size()) &&
+                            at.stage < static_cast<int>(saved.stages.size()) &&
+                            at.epoch < current.stages[at.stage].epochs;
+  if (!inside_stage) return;
+  auto require_same = [&](bool same, const std::string& key, const std::string& values) {
+    RequireFile(same, checkpoint,
+                key + " differs from the checkpoint's config" + values +
+                    ": the resumed batches would not be the interrupted run's (restore it, or resume from a stage "
+                    "checkpoint)");
+  };
+  auto values = [](const auto& was, const auto& is) {
+    std::ostringstream text;
+    text << " (" << was << " there, " << is << " here)";
+    return text.str();
+  };
+  require_same(saved.train.batch_size == current.train.batch_size, "train.batch_size",
+               values(saved.train.batch_size, current.train.batch_size));
+  require_same(saved.train.seed == current.train.seed, "train.seed", values(saved.train.seed, current.train.seed));
+  const StageOptions& stage = current.stages[at.stage];
+  const std::string data = stage.data.empty() ? "data." : "datasets." + stage.data + ".";
+  const DataOptions& was = saved.DataFor(saved.stages[at.stage]);
+  const DataOptions& is = current.DataFor(stage);
+  require_same(was.sequences == is.sequences, data + "sequences",
+               values(std::to_string(was.sequences.size()) + " sequence(s)",
+                      std::to_string(is.sequences.size()) + " sequence(s)"));
+  require_same(was.split_file == is.split_file, data + "split_file",
+               values("'" + was.split_file + "'", "'" + is.split_file + "'"));
+  require_same(is.split_file.empty() || was.split_root == is.split_root, data + "split_root",
+               values("'" + was.split_root + "'", "'" + is.split_root + "'"));
+  require_same(was.frame_step == is.frame_step, data + "frame_step", values(was.frame_step, is.frame_step));
+}
+
 }  // namespace
 
 Trainer::Trainer(StackNetConfig config, StopPredicate should_stop)
@@ -189,8 +228,6 @@ std::string Trainer::StageCheckpointPath(int stage) const {
 
 TrainResult Trainer::Run(const std::string& resume_checkpoint) {
   const TrainOptions& train = config_.train;
-  EnsureDirectory(train.output_dir);
-  WriteStreamAtomically(JoinPath(train.output_dir, "config.yaml"), [&](std::ostream& out) { out << config_yaml_; });
   TrainResult result;
   CheckpointInfo info;
   info.config_yaml = config_yaml_;
@@ -202,6 +239,7 @@ TrainResult Trainer::Run(const std::string& resume_checkpoint) {
     Require(ConfigToYaml(StackNetConfig{saved_config.network, {}, {}, {}, {}, {}, {}}) ==
                 ConfigToYaml(StackNetConfig{config_.network, {}, {}, {}, {}, {}, {}}),
             resume_checkpoint + ": the network options differ from the config; cannot resume");
+    RequireSameBatchesOnResume(saved_config, config_, saved.position, resume_checkpoint);
     info.position = saved.position;
     info.trained_model = saved.trained_model;
     LoadCheckpointWeights(resume_checkpoint, model_, device_);
@@ -214,14 +252,27 @@ TrainResult Trainer::Run(const std::string& resume_checkpoint) {
     model_->to(device_);
     std::cerr << "Initialised " << copied << " weight tensors from " << train.init_from << "\n";
   }
-  EpochSums resumed_epoch;  // the steps of the checkpoint's epoch before it (resume only)
+  // The first stage's data opens before any output file changes, as the checks above come before it: a
+  // refused resume or a missing sequence leaves config.yaml describing the checkpoints beside it, and the logs.
   const TrainingPosition resume_at = info.position;
+  std::unique_ptr<const StereoDataset> first_dataset;
+  if (resume_at.stage < static_cast<int>(config_.stages.size())) {
+    first_dataset = std::make_unique<const StereoDataset>(config_.DataFor(config_.stages[resume_at.stage]),
+                                                          config_.network.input_width, config_.network.input_height);
+  }
+  EnsureDirectory(train.output_dir);
+  WriteStreamAtomically(JoinPath(train.output_dir, "config.yaml"), [&](std::ostream& out) { out << config_yaml_; });
+  EpochSums resumed_epoch;  // the steps of the checkpoint's epoch before it (resume only)
   std::ofstream csv = OpenLossCsv(JoinPath(train.output_dir, "losses.csv"), resume_at, resume, &resumed_epoch);
   std::ofstream epochs_log = OpenEpochLog(JoinPath(train.output_dir, "epochs.jsonl"), resume_at, resume);
 
   for (int stage_index = info.position.stage; stage_index < static_cast<int>(config_.stages.size()); ++stage_index) {
     const StageOptions& stage = config_.stages[stage_index];
-    const StereoDataset dataset(config_.DataFor(stage), config_.network.input_width, config_.network.input_height);
+    const std::unique_ptr<const StereoDataset> opened =
+        first_dataset ? std::move(first_dataset)
+                      : std::make_unique<const StereoDataset>(config_.DataFor(stage), config_.network.input_width,
+                                                              config_.network.input_height);
+    const StereoDataset& dataset = *opened;
     std::cerr << "Stage " << stage_index << " '" << stage.name << "' (" << stage.model << "): " << stage.epochs
               << " epoch(s), " << dataset.Describe();
     torch::optim::Adam optimizer(PrepareStage(model_, stage),
@@ -236,12 +287,19 @@ TrainResult Trainer::Run(const std::string& resume_checkpoint) {
       SetLearningRate(optimizer, lr);
       DataLoader loader(dataset, config_.augment, train.batch_size, train.num_workers, train.seed, stage_index, epoch,
                         info.position.batch, stage.max_steps_per_epoch);
-      ProgressBar progress(stage.name + " epoch " + std::to_string(epoch + 1) + "/" + std::to_string(stage.epochs),
-                           loader.num_batches());
+      // After a mid-epoch resume the bar counts the batches this run does, so that its rate and ETA are not
+      // the batches before the interruption over the time since the resume.
+      const int first_batch = info.position.batch;
+      ProgressBar progress(stage.name + " epoch " + std::to_string(epoch + 1) + "/" + std::to_string(stage.epochs) +
+                               (first_batch > 0 ? " from batch " + std::to_string(first_batch + 1) + "/" +
+                                                      std::to_string(loader.num_batches())
+                                                : std::string()),
+                           std::max(0, loader.num_batches() - first_batch));
       // The checkpoint's epoch starts from the sums of its steps before the interruption (that epoch only: a
       // config with fewer epochs than the checkpoint's position skips it, and the next stage starts from 0).
       EpochSums sums;
       if (stage_index == resume_at.stage && epoch == resume_at.epoch) sums = std::exchange(resumed_epoch, EpochSums{});
+      const int steps_before = sums.steps;  // not timed by this run: `seconds` covers the others (timed_steps)
       const auto start = std::chrono::steady_clock::now();
       for (int batch_index = info.position.batch; auto batch = loader.Next(); ++batch_index) {
         const LossTerms terms = TrainStep(model_, optimizer, stage, config_.loss, batch->to(device_));
@@ -256,7 +314,7 @@ TrainResult Trainer::Run(const std::string& resume_checkpoint) {
         csv << stage_index << "," << stage.name << "," << epoch << "," << batch_index << ","
             << info.position.global_step << "," << lr << "," << total << "," << terms.unsupervised << ","
             << terms.supervised << "," << terms.lr << "," << terms.smooth << "," << terms.occ << "\n";
-        if (train.progress) progress.Update(batch_index + 1, FormatTerms(terms, total));
+        if (train.progress) progress.Update(batch_index + 1 - first_batch, FormatTerms(terms, total));
         if (should_stop_ && should_stop_(info.position)) {
           csv.flush();
           SaveCheckpoint(LastCheckpointPath(), model_, &optimizer, info);
@@ -285,7 +343,8 @@ TrainResult Trainer::Run(const std::string& resume_checkpoint) {
                                  {"mean_unsupervised", sum.unsupervised / n},
                                  {"mean_supervised", sum.supervised / n},
                                  {"mean_lr", sum.lr / n},        {"mean_smooth", sum.smooth / n},
-                                 {"mean_occ", sum.occ / n},      {"seconds", seconds}};
+                                 {"mean_occ", sum.occ / n},      {"seconds", seconds},
+                                 {"timed_steps", sums.steps - steps_before}};
         epochs_log << record.dump() << "\n";
         epochs_log.flush();
       }

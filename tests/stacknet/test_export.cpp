@@ -8,6 +8,8 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "core/error.h"
@@ -184,6 +186,59 @@ TEST(Export, TrainingCameraOfARawDriveIsItsColourPair) {
   const ModelMetadata metadata = ReadModelMetadata((dir / "m.pt").string());
   EXPECT_DOUBLE_EQ(metadata.baseline, colour.baseline);
   EXPECT_DOUBLE_EQ(metadata.fx_over_width, colour.left.fx / colour.left.width);
+
+  // A split file's drives (configs/stacknet_paper.yaml trains on splits only), resolved like the dataset
+  // resolves them (under split_root); a split file that is not on this machine is skipped.
+  std::ofstream(dir / "split.txt") << "2011_09_26/2011_09_26_drive_0001_sync 0000000002 l\n";
+  auto split_config = [&](const std::string& split_file) {
+    return "network: {encoder_depth: 18}\ndatasets: {K_o: {split_file: " + split_file + ", split_root: " +
+           (dir / "seq" / "kitti_raw").string() + "}}\nstages: [{data: K_o}]\n";
+  };
+  double baseline = 0, fx_over_width = 0;
+  ASSERT_TRUE(TrainingCameraFromConfig(split_config((dir / "split.txt").string()), &baseline, &fx_over_width));
+  EXPECT_DOUBLE_EQ(baseline, colour.baseline);
+  EXPECT_DOUBLE_EQ(fx_over_width, colour.left.fx / colour.left.width);
+  EXPECT_FALSE(TrainingCameraFromConfig(split_config((dir / "gone.txt").string()), &baseline, &fx_over_width));
+  fs::remove_all(dir);
+}
+
+// The training camera is that of the data the stages trained on (not data: when every stage names a
+// dataset); sequences no longer on this machine are skipped, one that is there but unreadable is an error
+// (not a reason to take the next sequence's camera, maybe another one).
+TEST(Export, TrainingCameraComesFromTheDataTheStagesUsed) {
+  const fs::path dir = fs::path(dvso::testing::ScratchPath("export_stage_camera"));
+  for (const auto& [name, baseline] :
+       std::vector<std::pair<std::string, std::string>>{{"narrow", "0.3"}, {"wide", "0.6"}}) {
+    const std::string sim = std::string(DVSO_BINARY) + " simulate --quiet --out " + (dir / name).string() +
+                            " --count 2 --width 128 --height 64 --baseline " + baseline + " > /dev/null 2>&1";
+    ASSERT_EQ(std::system(sim.c_str()), 0) << sim;
+  }
+  const std::string narrow = (dir / "narrow").string(), wide = (dir / "wide").string();
+  auto camera = [](const std::string& yaml) {
+    double baseline = 0, fx_over_width = 0;
+    EXPECT_TRUE(TrainingCameraFromConfig(yaml, &baseline, &fx_over_width)) << yaml;
+    return baseline;
+  };
+  const std::string data = "data: {sequences: [" + narrow + "]}\n";
+  // Every stage on a named dataset: data: was never read.
+  EXPECT_NEAR(camera(data + "datasets: {K: {sequences: [" + wide + "]}}\nstages: [{data: K}]\n"), 0.6, 1e-3);
+  // In stage order.
+  EXPECT_NEAR(camera(data + "datasets: {K: {sequences: [" + wide + "]}}\nstages: [{}, {data: K}]\n"), 0.3, 1e-3);
+  EXPECT_NEAR(camera(data + "datasets: {K: {sequences: [" + wide + "]}}\nstages: [{data: K}, {}]\n"), 0.6, 1e-3);
+  // Gone: skipped.
+  EXPECT_NEAR(camera("data: {sequences: [" + (dir / "gone").string() + ", " + wide + "]}\nstages: [{}]\n"), 0.6,
+              1e-3);
+  // There but unreadable: an error naming its calibration.
+  fs::copy(narrow, dir / "corrupt", fs::copy_options::recursive);
+  std::ofstream(dir / "corrupt" / "calib.txt") << "P0: 1 2 3\n";
+  double baseline = 0, fx_over_width = 0;
+  try {
+    TrainingCameraFromConfig("data: {sequences: [" + (dir / "corrupt").string() + ", " + wide + "]}\nstages: [{}]\n",
+                             &baseline, &fx_over_width);
+    ADD_FAILURE() << "an unreadable sequence was skipped; baseline " << baseline;
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("calib.txt"), std::string::npos) << e.what();
+  }
   fs::remove_all(dir);
 }
 

@@ -60,6 +60,20 @@ TEST_F(PredictCli, ImagesKeepTheirNames) {
   EXPECT_EQ(left.rows, 32);
 }
 
+// A preview is written like the maps: through a temporary file moved into place, and a failed write
+// is an error (it was ignored: the command said it wrote the previews).
+TEST_F(PredictCli, APreviewThatCannotBeWrittenIsAnError) {
+  WriteImage("a.png", 64, 32);
+  // The preview's temporary file cannot be created: a folder has its name.
+  fs::create_directories(dir_ / "out" / "left_color" / "a.tmp-writing.png" / "blocker");
+  const dvso::testing::CliRun run = dvso::testing::RunDvso(
+      "predict --model " + model_ + " --images " + (dir_ / "images").string() + " --out " + (dir_ / "out").string());
+  EXPECT_NE(run.exit_code, 0) << run.out;
+  EXPECT_NE(run.out.find("left_color/a.png"), std::string::npos) << run.out;
+  EXPECT_NE(run.out.find("cannot write the preview"), std::string::npos) << run.out;
+  EXPECT_FALSE(fs::exists(dir_ / "out" / "left_color" / "a.png"));
+}
+
 // `dvso bench` measures at the model's own input size unless told otherwise (the tiny config: 64x32).
 TEST_F(PredictCli, BenchDefaultsToTheModelsInputSize) {
   const std::string bench = "bench --device cpu --threads 1 --warmup 1 --runs 3 --json --model " + model_;

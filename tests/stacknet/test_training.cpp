@@ -7,6 +7,8 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
+#include <iterator>
 #include <nlohmann/json.hpp>
 #include <vector>
 
@@ -87,6 +89,80 @@ TEST(Config, EveryShippedStackNetConfigLoadsAndChecks) {
     ++loaded;
   }
   EXPECT_GE(loaded, 6);
+}
+
+// `dvso train --sequence DIR` replaces the default data; where every stage names a dataset (the shipped
+// configs but the tiny one) the stages would never read DIR, and the export would still take its camera.
+TEST(Config, SequenceOptionNeedsAStageOnTheDefaultData) {
+  const std::string datasets = "datasets: {K_o: {sequences: [a]}, K_r: {sequences: [b]}}\n";
+  StackNetConfig named =
+      ParseConfig(datasets + "stages: [{name: s0, data: K_o}, {name: s1, data: K_r}, {name: s2, data: K_o}]\n",
+                  "named.yaml", false);
+  try {
+    SetDefaultSequences(&named, {"mine"});
+    ADD_FAILURE() << "--sequence accepted where no stage trains on the default data";
+  } catch (const Error& e) {
+    const std::string message = e.what();
+    EXPECT_NE(message.find("--sequence"), std::string::npos) << message;
+    EXPECT_NE(message.find("'K_o', 'K_r'"), std::string::npos) << message;
+  }
+  EXPECT_TRUE(named.data.sequences.empty());
+  StackNetConfig paper = LoadConfig(std::string(DVSO_TEST_DATA_DIR) + "/../configs/stacknet_paper.yaml", false);
+  EXPECT_THROW(SetDefaultSequences(&paper, {"mine"}), Error);
+
+  // One stage on the default data is enough; the sequences then replace a default split (which would win).
+  StackNetConfig mixed = ParseConfig(
+      datasets + "data: {split_file: s.txt}\nstages: [{name: s0, data: K_o}, {name: s1}]\n", "mixed.yaml", false);
+  SetDefaultSequences(&mixed, {"mine"});
+  EXPECT_EQ(mixed.data.sequences, std::vector<std::string>{"mine"});
+  EXPECT_TRUE(mixed.data.split_file.empty());
+  EXPECT_NO_THROW(mixed.Check());
+}
+
+// yaml-cpp reads `key:` and `key: ~` as the string "null": `output_dir:` trained into a folder named null.
+TEST(Config, KeysWithoutAValueAreErrors) {
+  auto error_of = [](const std::string& yaml) {
+    try {
+      ParseConfig(yaml, "x.yaml", false);
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  for (const auto& [yaml, key] : std::vector<std::pair<std::string, std::string>>{
+           {"train:\n  output_dir:\n", "train.output_dir"},
+           {"train: {output_dir: ~}\n", "train.output_dir"},
+           {"network: {encoder_depth: null}\n", "network.encoder_depth"},
+           {"data: {sequences: }\n", "data.sequences"},
+           {"datasets: {K: {split_file: }}\n", "datasets.K.split_file"},
+           {"stages: [{name: a, data: }]\n", "stages[0].data"}}) {
+    const std::string message = error_of(yaml);
+    EXPECT_NE(message.find(key + ": has no value"), std::string::npos) << yaml << " -> '" << message << "'";
+    EXPECT_NE(message.find("x.yaml"), std::string::npos) << message;
+  }
+  // An empty string is a value ('' = none for the label folders).
+  EXPECT_EQ(error_of("data: {label_dir_left: ''}\n"), "");
+  EXPECT_EQ(ParseConfig("data: {label_dir_left: ''}\n", "x.yaml", false).data.label_dir_left, "");
+}
+
+// A split lists its frames itself: frame_step beside it would be ignored by the dataset.
+TEST(Config, FrameStepWithASplitFileIsAnError) {
+  EXPECT_NO_THROW(ParseConfig("data: {split_file: s.txt, frame_step: 1}\nstages: [{}]\n"));
+  EXPECT_NO_THROW(ParseConfig("data: {sequences: [a], frame_step: 2}\nstages: [{}]\n"));
+  try {
+    ParseConfig("data: {split_file: s.txt, frame_step: 2}\nstages: [{}]\n", "x.yaml");
+    ADD_FAILURE() << "frame_step accepted beside split_file";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("frame_step"), std::string::npos) << e.what();
+  }
+  // A named dataset inherits data.frame_step; the error names the dataset.
+  try {
+    ParseConfig("data: {sequences: [a], frame_step: 2}\ndatasets: {K: {split_file: s.txt}}\nstages: [{data: K}]\n");
+    ADD_FAILURE() << "an inherited frame_step accepted beside split_file";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("datasets.K"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("frame_step"), std::string::npos) << e.what();
+  }
 }
 
 void WriteText(const std::string& path, const std::string& text) { std::ofstream(path) << text; }
@@ -405,6 +481,63 @@ TEST_F(SimulatedTraining, ResumeAfterAnInterruptionContinuesExactly) {
   }
 }
 
+std::string ReadAll(const std::string& path) {
+  std::ifstream in(path);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+// Inside a stage, the batch size, the seed and the stage's data decide which samples the remaining batch
+// indices are: a resume with other values is refused, naming the key, and (like any refused resume, or a
+// run whose data does not open) before config.yaml or the logs change, so config.yaml still describes the
+// checkpoints beside it. At a stage boundary the next stage starts afresh and they may change.
+TEST_F(SimulatedTraining, RefusedResumeLeavesTheOutputFolderAsItWas) {
+  at::set_num_threads(1);
+  const StackNetConfig config = ResumeConfig(TempDir("refused"));
+  const TrainResult stop = RunUntilStep(config, 2);
+  ASSERT_TRUE(stop.interrupted);
+  ASSERT_EQ(stop.position.batch, 2);
+  const std::string out = config.train.output_dir;
+  const std::string config_yaml = ReadAll(out + "/config.yaml"), csv = ReadAll(out + "/losses.csv"),
+                    epochs = ReadAll(out + "/epochs.jsonl");
+  ASSERT_EQ(config_yaml, ConfigToYaml(config));
+  ASSERT_NE(csv.find("\n0,simple_semi,0,1,2,"), std::string::npos) << csv;  // the steps before the stop
+
+  auto refused = [&](const std::string& what, const std::function<void(StackNetConfig&)>& change,
+                     const std::string& key, const std::string& checkpoint) {
+    SCOPED_TRACE(what);
+    StackNetConfig changed = config;
+    change(changed);
+    try {
+      Trainer trainer(changed);
+      trainer.Run(checkpoint);
+      ADD_FAILURE() << "run accepted";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
+    }
+    EXPECT_EQ(ReadAll(out + "/config.yaml"), config_yaml);
+    EXPECT_EQ(ReadAll(out + "/losses.csv"), csv);
+    EXPECT_EQ(ReadAll(out + "/epochs.jsonl"), epochs);
+  };
+  const std::string last = stop.last_checkpoint;
+  refused("batch size", [](StackNetConfig& c) { c.train.batch_size = 1; }, "train.batch_size", last);
+  refused("seed", [](StackNetConfig& c) { c.train.seed += 1; }, "train.seed", last);
+  refused("sequences", [&](StackNetConfig& c) { c.data.sequences.push_back(sequence_); }, "data.sequences", last);
+  refused("frame step", [](StackNetConfig& c) { c.data.frame_step = 2; }, "data.frame_step", last);
+  refused("network", [](StackNetConfig& c) { c.network.width_multiplier = 0.25; }, "network options", last);
+  // Not a resume: a run whose data does not open leaves the earlier run's files too.
+  refused("missing sequence", [](StackNetConfig& c) { c.data.sequences = {"/nonexistent/sequence"}; },
+          "/nonexistent/sequence", "");
+
+  // The unchanged config resumes; from the stage-0 checkpoint, stage 1 may use another batch size and seed.
+  Trainer resumed(config);
+  ASSERT_TRUE(resumed.Run(last).finished);
+  StackNetConfig next_stage = config;
+  next_stage.train.batch_size = 1;
+  next_stage.train.seed += 1;
+  Trainer boundary(next_stage);
+  EXPECT_TRUE(boundary.Run(boundary.StageCheckpointPath(0)).finished);
+}
+
 // epochs.jsonl after resumes: an interruption on an epoch's last batch, and a resume from an older
 // checkpoint, leave one record per epoch with the steps and mean loss of an uninterrupted run.
 TEST_F(SimulatedTraining, EpochLogAfterResumesHasOneRecordPerEpoch) {
@@ -443,6 +576,11 @@ TEST_F(SimulatedTraining, EpochLogAfterResumesHasOneRecordPerEpoch) {
   Trainer resumed(config);
   ASSERT_TRUE(resumed.Run(stop.last_checkpoint).finished);
   expect_like_full_run(config.train.output_dir, "resumed on an epoch's last batch");
+  // `seconds` times the steps of the run that finished the epoch: none of the resumed epoch's 3.
+  const std::vector<nlohmann::json> timed = read_log(config.train.output_dir);
+  ASSERT_EQ(timed.size(), 3u);
+  EXPECT_EQ(timed[0]["timed_steps"].get<int>(), 0);
+  EXPECT_EQ(timed[1]["timed_steps"].get<int>(), timed[1]["steps"].get<int>());
 
   // The finished run resumed from its stage-0 checkpoint redoes stage 1 and logs it once.
   Trainer again(config);
