@@ -21,10 +21,13 @@ namespace dvso {
 
 cv::Mat ReadKittiMapPng(const std::string& path) {
   RequireFile(std::filesystem::is_regular_file(path), path, "map file does not exist");
-  const cv::Mat raw = cv::imread(path, cv::IMREAD_ANYDEPTH | cv::IMREAD_GRAYSCALE);
+  // Unchanged: a grey conversion would accept a 16-bit colour PNG (an image, not a map) as a blend of its channels.
+  const cv::Mat raw = cv::imread(path, cv::IMREAD_UNCHANGED);
   RequireFile(!raw.empty(), path, "cannot decode PNG");
   RequireFile(raw.depth() == CV_16U && raw.channels() == 1, path,
-              "expected a single-channel uint16 PNG (KITTI map convention)");
+              "expected a single-channel uint16 PNG (KITTI map convention), got " + std::to_string(raw.channels()) +
+                  " channel(s) of " + (raw.depth() == CV_16U ? "16" : raw.depth() == CV_8U ? "8" : "other") +
+                  "-bit values");
   cv::Mat map;
   raw.convertTo(map, CV_32F, 1.0 / 256.0);
   return map;
@@ -140,17 +143,24 @@ NpyDisparityStack::~NpyDisparityStack() {
   if (mapped_ != nullptr && mapped_ != MAP_FAILED) ::munmap(mapped_, mapped_size_);
 }
 
-cv::Mat NpyDisparityStack::Frame(int index, int image_width, int image_height) const {
+cv::Mat NpyDisparityStack::Frame(int index, int image_width, int image_height, NonFiniteDisparity non_finite) const {
   RequireFile(index >= 0 && index < count_, path_,
               "frame " + std::to_string(index) + " out of range (stack holds " + std::to_string(count_) + ")");
   const float* base = reinterpret_cast<const float*>(static_cast<const char*>(mapped_) + data_offset_) +
                       static_cast<size_t>(index) * height_ * width_;
-  // Non-finite values (a network's NaN) become 0 = invalid: no depth there.
+  // Non-finite values (a network's NaN) become 0 = invalid: no depth there, unless the caller refuses them.
   cv::Mat view(height_, width_, CV_32F);
   const float* src = base;
   for (int y = 0; y < height_; ++y) {
     float* row = view.ptr<float>(y);
-    for (int x = 0; x < width_; ++x, ++src) row[x] = std::isfinite(*src) ? *src : 0.0f;
+    for (int x = 0; x < width_; ++x, ++src) {
+      if (!std::isfinite(*src) && non_finite == NonFiniteDisparity::kError) {
+        throw Error(path_, "frame " + std::to_string(index) + ", pixel (x " + std::to_string(x) + ", y " +
+                               std::to_string(y) + "): non-finite value " + std::to_string(*src) +
+                               " (predictions must be finite)");
+      }
+      row[x] = std::isfinite(*src) ? *src : 0.0f;
+    }
   }
   // In pixels of the stack's own width, then resized (bilinear, values scaled with the width).
   view *= static_cast<double>(width_);

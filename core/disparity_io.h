@@ -9,7 +9,7 @@
 namespace dvso {
 
 // Reads a KITTI uint16 PNG into CV_32F; invalid pixels (0) become 0. Throws
-// dvso::Error naming the file if it is missing, unreadable or not 16-bit.
+// dvso::Error naming the file if it is missing, unreadable, not 16-bit or has more than one channel.
 cv::Mat ReadKittiMapPng(const std::string& path);
 
 // Writes a CV_32F map as KITTI uint16 PNG (round(value * 256), clamped to
@@ -23,6 +23,11 @@ inline constexpr float kKittiMapMaxValue = 65535.0f / 256.0f;
 // (invalid): WriteKittiMapPng would clamp them, and a clamped GT value is a
 // wrong one (a 2.7 m near depth at 2x KITTI size has ~285 px of disparity).
 cv::Mat InvalidBeyondKittiMapRange(const cv::Mat& map);
+
+// What NpyDisparityStack::Frame makes of a non-finite value (a network's NaN or inf): 0 = invalid, "no
+// depth here" (the odometry's disparity sources, which skip such pixels), or an error (evaluation, where a
+// 0 would be scored as the farthest depth instead of showing that the prediction is broken).
+enum class NonFiniteDisparity { kInvalid, kError };
 
 // Memory-mapped float32 .npy stack of shape (N, H, W) holding disparities
 // normalised by image width (monodepth / unofficial DVSO convention).
@@ -38,8 +43,10 @@ class NpyDisparityStack {
   int width() const { return width_; }
   // Frame i as CV_32F in pixels of an image `image_width` wide (value * image_width),
   // resized to image_width x image_height when those differ from the stack's size.
-  // Non-finite values become 0 (invalid). Throws dvso::Error on an out-of-range index.
-  cv::Mat Frame(int index, int image_width, int image_height) const;
+  // Non-finite values become 0 (invalid), or with kError throw dvso::Error naming the file, frame and
+  // pixel. Throws dvso::Error on an out-of-range index.
+  cv::Mat Frame(int index, int image_width, int image_height,
+                NonFiniteDisparity non_finite = NonFiniteDisparity::kInvalid) const;
 
  private:
   std::string path_;

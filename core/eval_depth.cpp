@@ -83,7 +83,7 @@ void DepthEvalOptions::Check() const {
   Require(std::isfinite(fxb) && fxb >= 0.0, "eval-depth: fxb must be >= 0");
   Require((kitti_focal_by_width ? 1 : 0) + (fxb > 0.0 ? 1 : 0) + (raw_root.empty() ? 0 : 1) <= 1,
           "eval-depth: give only one of --fxb (or --calib), --kitti-focal and --raw-root");
-  if (pred_kind == MapKind::kDisparity || gt_kind == MapKind::kDisparity) {
+  if (ConvertsDisparity(*this)) {
     Require(fxb > 0.0 || kitti_focal_by_width || !raw_root.empty(),
             "eval-depth: disparity maps need focal length * baseline (--fxb, --calib, --kitti-focal or, with "
             "--split, --raw-root) to become depths");
@@ -95,6 +95,10 @@ void DepthEvalOptions::Check() const {
   Require(image_dir.empty() || !range_edges.empty(),
           "eval-depth: images only select the pixels of the depth-range breakdown: give --ranges too");
   if (!range_edges.empty()) CheckDepthRangeEdges(range_edges);
+}
+
+bool ConvertsDisparity(const DepthEvalOptions& options) {
+  return options.pred_kind == MapKind::kDisparity || options.gt_kind == MapKind::kDisparity;
 }
 
 double KittiFocalLengthForWidth(int width) {
@@ -289,7 +293,8 @@ DepthEvalResult EvaluateNamedMaps(const std::vector<std::string>& names, const s
     const std::string gt_path = JoinPath(gt_dir, name);
     const cv::Mat gt_map = ReadKittiMapPng(gt_path);
     double fxb = fxb_per_map.empty() ? options.fxb : fxb_per_map[i];
-    if (fxb_per_map.empty() && options.kitti_focal_by_width) {
+    // Only a disparity needs it: depth against depth works at any image width.
+    if (fxb_per_map.empty() && options.kitti_focal_by_width && ConvertsDisparity(options)) {
       try {
         fxb = KittiFocalLengthForWidth(gt_map.cols) * kKittiStereoBaseline;
       } catch (const Error& e) {
@@ -391,8 +396,7 @@ DepthEvalResult EvaluateDepthSplit(const std::string& split_path, const std::str
                 "no GT map for split line " + std::to_string(i + 1) + " (write them with `dvso gt-depth --split`)");
   }
   std::vector<double> fxb_per_line;  // empty: options' fx * baseline
-  const bool any_disparity = options.pred_kind == MapKind::kDisparity || options.gt_kind == MapKind::kDisparity;
-  if (!options.raw_root.empty() && any_disparity) {
+  if (!options.raw_root.empty() && ConvertsDisparity(options)) {
     std::map<std::string, RawCameraCalibration> calibrations;  // one per calibration folder (raw day)
     for (size_t i = 0; i < entries.size(); ++i) {
       try {
@@ -411,7 +415,11 @@ DepthEvalResult EvaluateDepthSplit(const std::string& split_path, const std::str
     RequireFile(stack.size() == static_cast<int>(entries.size()), pred,
                 std::to_string(stack.size()) + " maps for " + std::to_string(entries.size()) + " split entries");
     return EvaluateNamedMaps(
-        names, gt_dir, [&](size_t i, const cv::Mat& gt) { return stack.Frame(static_cast<int>(i), gt.cols, gt.rows); },
+        names, gt_dir,
+        [&](size_t i, const cv::Mat& gt) {
+          // A NaN made 0 would be scored as the farthest depth (max_depth): a broken prediction is an error.
+          return stack.Frame(static_cast<int>(i), gt.cols, gt.rows, NonFiniteDisparity::kError);
+        },
         [&](size_t i) { return pred + " [" + std::to_string(i) + "]"; }, options, fxb_per_line);
   }
   for (const std::string& name : names) {
@@ -452,9 +460,13 @@ nlohmann::json DepthEvalResultToJson(const DepthEvalResult& result, const DepthE
   j["median_scaling"] = options.median_scaling;
   j["pred_kind"] = MapKindName(options.pred_kind);
   j["gt_kind"] = MapKindName(options.gt_kind);
-  if (options.fxb > 0.0) j["fxb"] = options.fxb;
-  if (options.kitti_focal_by_width) j["fxb"] = "KITTI focal length by width x 0.54 m";
-  if (!options.raw_root.empty()) j["fxb"] = "per split line: P_rect_0X[0][0] x (b3 - b2) of its drive's calibration";
+  if (ConvertsDisparity(options)) {  // depth against depth uses no fx * baseline: none is reported
+    if (options.fxb > 0.0) j["fxb"] = options.fxb;
+    if (options.kitti_focal_by_width) j["fxb"] = "KITTI focal length by width x 0.54 m";
+    if (!options.raw_root.empty()) {
+      j["fxb"] = "per split line: P_rect_0X[0][0] x (b3 - b2) of its drive's calibration";
+    }
+  }
   nlohmann::json per_image = nlohmann::json::array();
   for (size_t i = 0; i < result.names.size(); ++i) {
     nlohmann::json entry = MetricsToJson(result.per_image[i], options.median_scaling);

@@ -47,6 +47,10 @@ struct DepthEvalOptions {
   void Check() const;
 };
 
+// Whether predictions or GT are disparities: only then is fx * baseline (fxb, the KITTI width table or the
+// raw root's calibration) looked up, used and reported.
+bool ConvertsDisparity(const DepthEvalOptions& options);
+
 struct DepthMetrics {
   double abs_rel = 0.0;   // mean |d - d*| / d*
   double sq_rel = 0.0;    // mean (d - d*)^2 / d*

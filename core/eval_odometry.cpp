@@ -116,12 +116,16 @@ void ComputeKittiSegmentErrors(const std::vector<Eigen::Isometry3d>& gt,
   for (const double length : options.segment_lengths) metrics->per_length.push_back({length, 0, 0.0, 0.0});
   double sum_t = 0.0, sum_r = 0.0;
   int count = 0;
+  metrics->segments_without_estimate = 0;
   for (size_t first = 0; first < gt.size(); first += static_cast<size_t>(options.step_size)) {
     for (size_t l = 0; l < options.segment_lengths.size(); ++l) {
       const double length = options.segment_lengths[l];
       const int last = LastFrameOfSegment(distances, static_cast<int>(first), length);
       if (last < 0) continue;
-      if (!valid[first] || !valid[last]) continue;  // estimate lacks an end pose of this segment
+      if (!valid[first] || !valid[last]) {  // estimate lacks an end pose of this segment
+        ++metrics->segments_without_estimate;
+        continue;
+      }
       const Eigen::Matrix4d error = RelativePoseError(gt[first], gt[last], est[first], est[last]);
       // Per-metre errors, as the devkit stores them (rad/m and m/m).
       const double r_err = RotationAngle(error.topLeftCorner<3, 3>()) / length;
@@ -147,6 +151,14 @@ void ComputeKittiSegmentErrors(const std::vector<Eigen::Isometry3d>& gt,
       bucket.r_rel = 100.0 * kRadToDeg * bucket.r_rel / bucket.segments;
     }
   }
+}
+
+std::string NoKittiSegmentsReason(const OdometryMetrics& metrics) {
+  if (metrics.segments_without_estimate > 0) {
+    return "the estimate lacks the first or last frame of all " + std::to_string(metrics.segments_without_estimate) +
+           " segments of the GT path";
+  }
+  return "the GT path is no longer than the shortest segment length";
 }
 
 namespace {
@@ -301,6 +313,7 @@ nlohmann::json OdometryMetricsToJson(const OdometryMetrics& m) {
   j["t_rel_unit"] = "percent";
   j["r_rel_unit"] = "deg/100m";
   j["segments"] = m.segments;
+  j["segments_without_estimate"] = m.segments_without_estimate;
   nlohmann::json per_length = nlohmann::json::array();
   for (const SegmentLengthErrors& b : m.per_length) {
     per_length.push_back({{"length", b.length}, {"segments", b.segments}, {"t_rel", NumberOrNull(b.t_rel)},
@@ -377,7 +390,7 @@ std::string FormatOdometryMetrics(const OdometryMetrics& m) {
   out << "KITTI (" << KittiBasis(m.align) << ", " << m.segments << " segments):\n";
   out << "  t_rel           : " << FormatNumber(m.t_rel, 4, " %") << "\n";
   out << "  r_rel           : " << FormatNumber(m.r_rel, 4, " deg/100m") << "\n";
-  if (m.segments == 0) out << "  (GT path shorter than the shortest segment length: no KITTI segments)\n";
+  if (m.segments == 0) out << "  (no KITTI segments: " << NoKittiSegmentsReason(m) << ")\n";
   for (const SegmentLengthErrors& b : m.per_length) {
     if (b.segments == 0) continue;
     out << "    " << std::setw(5) << b.length << " m  (" << std::setw(5) << b.segments << " segs): t "

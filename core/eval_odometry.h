@@ -48,7 +48,8 @@ struct OdometryMetrics {
   int unmatched_est_frames = 0;    // estimated poses matching no GT pose
 
   // KITTI protocol (on the aligned estimate when align != kNone).
-  int segments = 0;                // segments of all lengths evaluated (0: GT path < shortest length)
+  int segments = 0;                // segments of all lengths evaluated (0: see NoKittiSegmentsReason)
+  int segments_without_estimate = 0;  // segments the GT path has but the estimate lacks a first or last pose of
   double t_rel = 0.0;              // mean over all segments of |t_err| / length, percent
   double r_rel = 0.0;              // mean over all segments of angle(R_err) / length, deg / 100 m
   std::vector<SegmentLengthErrors> per_length;
@@ -83,6 +84,10 @@ void ComputeKittiSegmentErrors(const std::vector<Eigen::Isometry3d>& gt,
                                const std::vector<Eigen::Isometry3d>& est, const std::vector<bool>& valid,
                                const OdometryEvalOptions& options, OdometryMetrics* metrics);
 
+// Why `metrics` has no KITTI segment (for segments == 0): every segment the GT path has was dropped because
+// the estimate lacks its first or last frame, or the GT path is no longer than the shortest segment length.
+std::string NoKittiSegmentsReason(const OdometryMetrics& metrics);
+
 // Full evaluation. Throws dvso::Error when fewer than 2 frames match (3 with alignment).
 OdometryMetrics EvaluateOdometry(const Trajectory& gt, const Trajectory& est,
                                  const OdometryEvalOptions& options);
@@ -101,7 +106,8 @@ std::string FormatOdometryMetrics(const OdometryMetrics& metrics);
 
 // Writes <dir>/trajectory_xz.png (top view, GT vs aligned estimate) and, when
 // any KITTI segment was evaluated, <dir>/segment_errors.png (t_rel and r_rel per
-// segment length). Returns the paths written.
+// segment length); without segments an old segment_errors.png is removed, so the
+// folder never shows another run's errors. Returns the paths written.
 std::vector<std::string> WriteOdometryPlots(const std::string& dir, const Trajectory& gt, const Trajectory& aligned_est,
                         const OdometryMetrics& metrics);
 

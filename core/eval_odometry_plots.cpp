@@ -1,5 +1,6 @@
 // Figures of `dvso eval-odometry --plot-dir`: the top view (x-z plane, the
 // ground plane of KITTI's camera frame) and the KITTI errors per segment length.
+#include <filesystem>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
@@ -60,7 +61,14 @@ std::vector<std::string> WriteOdometryPlots(const std::string& dir, const Trajec
     r_series.y.push_back(b.r_rel);
   }
   const std::string segment_path = JoinPath(dir, "segment_errors.png");
-  if (t_series.x.empty()) return written;  // no segments: nothing to plot (the caller says so)
+  if (t_series.x.empty()) {
+    // No segments: nothing to plot (the caller says why), and a plot of an earlier run in this folder
+    // must not stay beside this run's top view as if it were this run's.
+    std::error_code error;
+    std::filesystem::remove(segment_path, error);  // no error when there is no such file
+    RequireFile(!error, segment_path, "cannot remove the segment-error plot of an earlier run: " + error.message());
+    return written;
+  }
   PlotOptions panel;
   panel.width = 650;
   panel.height = 500;

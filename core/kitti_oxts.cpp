@@ -2,9 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
+#include <optional>
 #include <sstream>
 
 #include "core/error.h"
@@ -79,28 +81,38 @@ Eigen::Isometry3d CameraFromImu(const std::string& calib_dir, int camera) {
   return shift * calibration.RectifiedFromVelodyne() * velo_from_imu;
 }
 
-std::vector<Eigen::Isometry3d> OxtsCameraPoses(const std::string& drive_dir, int camera) {
+std::string OxtsPacketPath(const std::string& drive_dir, long long number) {
+  char name[32];
+  std::snprintf(name, sizeof(name), "%010lld.txt", number);
+  return (fs::path(drive_dir) / "oxts" / "data" / name).string();
+}
+
+std::map<long long, Eigen::Isometry3d> OxtsCameraPoses(const std::string& drive_dir, int camera) {
   const fs::path data_dir = fs::path(drive_dir) / "oxts" / "data";
   RequireFile(fs::is_directory(data_dir), data_dir.string(), "no OXTS folder (KITTI raw layout: DRIVE/oxts/data/)");
-  std::vector<std::string> files;
+  std::map<long long, std::string> files;  // by file number
   for (const auto& entry : fs::directory_iterator(data_dir)) {
-    if (entry.is_regular_file() && entry.path().extension() == ".txt") files.push_back(entry.path().string());
+    if (!entry.is_regular_file() || entry.path().extension() != ".txt") continue;
+    const std::optional<long long> number = ParseFrameNumber(entry.path().stem().string());
+    RequireFile(number.has_value(), entry.path().string(),
+                "an OXTS packet is named by its frame number (oxts/data/NNNNNNNNNN.txt)");
+    const auto [it, inserted] = files.emplace(*number, entry.path().string());
+    RequireFile(inserted, entry.path().string(), "has the frame number of " + it->second + " too");
   }
-  std::sort(files.begin(), files.end());
   RequireFile(!files.empty(), data_dir.string(), "no OXTS packets (*.txt)");
   // Every calibration file sits in the same folder (the date folder, or copied into the drive).
   const std::string calib_dir = FindRawCalibrationDir(drive_dir);
   const Eigen::Isometry3d imu_from_camera = CameraFromImu(calib_dir, camera).inverse();
-  std::vector<Eigen::Isometry3d> poses;
-  poses.reserve(files.size());
+  std::map<long long, Eigen::Isometry3d> poses;
   double scale = 0.0;
   Eigen::Isometry3d first_inverse = Eigen::Isometry3d::Identity();
-  for (size_t i = 0; i < files.size(); ++i) {
-    const OxtsPacket packet = ReadOxtsPacket(files[i]);
-    if (i == 0) scale = MercatorScale(packet.lat);
+  for (const auto& [number, path] : files) {
+    const OxtsPacket packet = ReadOxtsPacket(path);
+    const bool first = poses.empty();
+    if (first) scale = MercatorScale(packet.lat);
     const Eigen::Isometry3d T_world_camera = OxtsToPose(packet, scale) * imu_from_camera;
-    if (i == 0) first_inverse = T_world_camera.inverse();
-    poses.push_back(first_inverse * T_world_camera);
+    if (first) first_inverse = T_world_camera.inverse();
+    poses.emplace(number, first_inverse * T_world_camera);
   }
   return poses;
 }

@@ -18,6 +18,7 @@
 #pragma once
 
 #include <Eigen/Geometry>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -47,10 +48,14 @@ OxtsPacket PoseToOxts(const Eigen::Isometry3d& T_world_imu, double scale);
 // T_camrect_imu of rectified camera `camera` (0..3) of a raw date folder's calibration files.
 Eigen::Isometry3d CameraFromImu(const std::string& calib_dir, int camera);
 
-// Camera poses of a drive, one per packet of `drive/oxts/data/` (sorted), relative to the first
-// (KITTI odometry convention). The calibration files are looked up in the drive folder, then in
-// its parent (the date folder of the raw layout).
-std::vector<Eigen::Isometry3d> OxtsCameraPoses(const std::string& drive_dir, int camera);
+// Camera poses of a drive, one per packet `drive/oxts/data/NNNNNNNNNN.txt`, keyed by the packet's file
+// number (not its position in the listing: a missing file must not shift the packets after it onto other
+// frames), relative to the lowest-numbered packet (KITTI odometry convention). The calibration files are
+// looked up in the drive folder, then in its parent (the date folder of the raw layout). Throws naming
+// the file for a packet whose name is not a frame number.
+std::map<long long, Eigen::Isometry3d> OxtsCameraPoses(const std::string& drive_dir, int camera);
+// The path of packet `number` of a drive (oxts/data/%010d.txt), for messages about a missing one.
+std::string OxtsPacketPath(const std::string& drive_dir, long long number);
 
 // Extract drives: a frame whose nearest OXTS packet (100 Hz, so normally <= 5 ms away) is farther than this,
 // half a 10 Hz camera period, gets a warning (real recordings have gaps in the GPS/IMU stream).

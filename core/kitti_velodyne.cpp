@@ -75,7 +75,14 @@ VelodyneProjection ReadVelodyneProjection(const std::string& calib_dir, int came
   return projection;
 }
 
-cv::Mat ProjectVelodyneDepth(const std::vector<VelodynePoint>& points, const VelodyneProjection& projection) {
+VelodyneDepthValue ParseVelodyneDepthValue(const std::string& name) {
+  if (name == "velodyne-x") return VelodyneDepthValue::kVelodyneX;
+  if (name == "camera-z") return VelodyneDepthValue::kCameraZ;
+  throw Error("unknown depth value '" + name + "' (expected velodyne-x or camera-z)");
+}
+
+cv::Mat ProjectVelodyneDepth(const std::vector<VelodynePoint>& points, const VelodyneProjection& projection,
+                             VelodyneDepthValue value) {
   cv::Mat depth(projection.height, projection.width, CV_32F, cv::Scalar(0));
   for (const VelodynePoint& point : points) {
     if (!(point.x() >= kMinForward)) continue;
@@ -83,8 +90,11 @@ cv::Mat ProjectVelodyneDepth(const std::vector<VelodynePoint>& points, const Vel
     if (!(x.z() > 0)) continue;
     const long u = std::lround(x.x() / x.z()), v = std::lround(x.y() / x.z());
     if (u < 0 || v < 0 || u >= projection.width || v >= projection.height) continue;
+    const double stored = value == VelodyneDepthValue::kVelodyneX ? static_cast<double>(point.x()) : x.z();
+    // x_velo can be 0 (kMinForward) where z > 0: such a point is no depth (monodepth sets depth <= 0 to 0).
+    if (!(stored > 0)) continue;
     float& d = depth.at<float>(static_cast<int>(v), static_cast<int>(u));
-    if (d == 0 || x.z() < d) d = static_cast<float>(x.z());
+    if (d == 0 || stored < d) d = static_cast<float>(stored);
   }
   return depth;
 }

@@ -2,8 +2,13 @@
 // sparse depth ground truth of the Eigen split (paper section 5.1, Table 1), as
 // monodepth's generate_depth_map builds it:
 //   x_image ~ P_rect_0X * R_rect_00 * T_cam0_velo * X_velo     (homogeneous)
-// points behind the Velodyne (x_velo < kMinForward) are dropped, depth is the
-// third homogeneous coordinate, a pixel hit by several points keeps the nearest.
+// points behind the Velodyne (x_velo < kMinForward) are dropped, a pixel hit by
+// several points keeps the nearest. The value stored is, by default, the point's
+// Velodyne forward distance x_velo, as the Eigen-split GT of monodepth and
+// monodepth2 (generate_depth_map(..., vel_depth=True)); the camera depth z (the
+// third homogeneous coordinate) is the other choice. On KITTI the Velodyne sits
+// ~0.27 m behind camera 00, so z ~= x_velo - 0.27 m: published abs-rel numbers
+// are measured against x_velo.
 // Pixel convention: 0-based, pixel (u, v) covers [u - 0.5, u + 0.5), i.e. the
 // projected coordinate is rounded (the convention of P_rect and of our
 // simulator); monodepth additionally subtracts 1 (a MATLAB 1-based leftover),
@@ -35,7 +40,15 @@ struct VelodyneProjection {
 // The projection into rectified camera `camera` (0..3) from a raw date folder's calibration.
 VelodyneProjection ReadVelodyneProjection(const std::string& calib_dir, int camera);
 
-// CV_32F depth map (m) of the projection's size; 0 = no point.
-cv::Mat ProjectVelodyneDepth(const std::vector<VelodynePoint>& points, const VelodyneProjection& projection);
+// What a GT pixel holds: the point's Velodyne x (monodepth's vel_depth=True, the published Eigen-split
+// protocol) or its depth along the rectified camera's optical axis.
+enum class VelodyneDepthValue { kVelodyneX, kCameraZ };
+// "velodyne-x" | "camera-z"; throws dvso::Error otherwise.
+VelodyneDepthValue ParseVelodyneDepthValue(const std::string& name);
+
+// CV_32F depth map (m) of the projection's size; 0 = no point. A pixel hit by several points keeps the
+// smallest value of the chosen kind (monodepth keeps the minimum of the stored value too).
+cv::Mat ProjectVelodyneDepth(const std::vector<VelodynePoint>& points, const VelodyneProjection& projection,
+                             VelodyneDepthValue value = VelodyneDepthValue::kVelodyneX);
 
 }  // namespace dvso

@@ -34,6 +34,14 @@ bool ParseLine(const std::string& line, std::vector<double>* values) {
   return true;
 }
 
+// A printed rotation is orthonormal to its printed digits (KITTI's GT, 7 significant digits: ~2e-7; our
+// writers, 12 digits: ~1e-12). Beyond this the 3x3 block is no rotation (scaled, sheared, a reflection,
+// numbers in the wrong columns), and every metric on it would be meaningless.
+constexpr double kRotationTolerance = 1e-3;
+// A printed unit quaternion has norm 1 to its digits; one further off (e.g. qw = 0.001 for "no rotation")
+// is no rotation that normalising could recover with confidence.
+constexpr double kQuaternionNormTolerance = 1e-2;
+
 bool IsBlankOrComment(const std::string& line) {
   const auto first = line.find_first_not_of(" \t\r");
   return first == std::string::npos || line[first] == '#';
@@ -63,12 +71,21 @@ Trajectory ReadTrajectory(const std::string& path, TrajectoryFormat format,
     if (format == TrajectoryFormat::kKitti) {
       RequireFile(v.size() == 12, path, where + ": KITTI pose needs 12 numbers");
       pose.T_world_camera = IsometryFromRowMajor3x4(v.data());
+      const Eigen::Matrix3d R = pose.T_world_camera.linear();
+      const double orthogonality = (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
+      const double determinant = R.determinant();
+      RequireFile(orthogonality <= kRotationTolerance && std::abs(determinant - 1.0) <= kRotationTolerance, path,
+                  where + ": the 3x3 part is not a rotation (max |R^T R - I| = " + std::to_string(orthogonality) +
+                      ", det R = " + std::to_string(determinant) + "; tolerance " +
+                      std::to_string(kRotationTolerance) + ")");
       pose.timestamp = static_cast<double>(trajectory.poses.size());
     } else {
       RequireFile(v.size() == 8, path, where + ": TUM pose needs 8 numbers");
       Eigen::Quaterniond q(v[7], v[4], v[5], v[6]);
-      RequireFile(q.norm() > 1e-6, path, where + ": zero quaternion");
-      q.normalize();
+      RequireFile(std::abs(q.norm() - 1.0) <= kQuaternionNormTolerance, path,
+                  where + ": quaternion (qx qy qz qw) of norm " + std::to_string(q.norm()) +
+                      ", not a unit quaternion (tolerance " + std::to_string(kQuaternionNormTolerance) + ")");
+      q.normalize();  // the printed digits' rounding
       pose.timestamp = v[0];
       pose.T_world_camera.linear() = q.toRotationMatrix();
       pose.T_world_camera.translation() = Eigen::Vector3d(v[1], v[2], v[3]);

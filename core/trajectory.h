@@ -28,7 +28,8 @@ struct Trajectory {
 // Reads a trajectory; kAuto decides by the number of columns (12 = KITTI,
 // 8 = TUM). Lines starting with '#' are comments. KITTI poses get timestamps
 // from `times` when given (same length; an error for a TUM file, which has its own), else their line index. Throws
-// dvso::Error naming the file and line on any malformed input.
+// dvso::Error naming the file and line on any malformed input, including a KITTI 3x3 block that is no
+// rotation (|R^T R - I| or |det R - 1| above 1e-3) and a TUM quaternion whose norm is not 1 within 1e-2.
 Trajectory ReadTrajectory(const std::string& path, TrajectoryFormat format = TrajectoryFormat::kAuto,
                           const std::vector<double>* times = nullptr);
 

@@ -14,6 +14,7 @@ namespace {
 
 struct EvalDepthArgs {
   std::string pred_dir, gt_dir, calib_path, split_path;
+  std::string cameras = "grey";  // the pair of --calib whose fx * baseline converts the disparities
   std::string pred_kind = "disparity", gt_kind = "disparity", crop = "none";
   bool json = false;
   DepthEvalOptions options;
@@ -21,36 +22,44 @@ struct EvalDepthArgs {
 
 void Run(EvalDepthArgs& args, const CLI::App& cmd) {
   if (!args.split_path.empty()) {
-    // The paper's protocol (section 5.1, Table 1): Velodyne depth GT, Garg crop, 1e-3 .. 80 m; disparities
-    // become depths with each line's own calibration under --raw-root (as monodepth's Eigen evaluation),
-    // else with KITTI fx from the GT width times 0.54 m (~1.4 % farther on 2011_09_26); each stays overridable.
+    // The paper's protocol (section 5.1, Table 1): Velodyne depth GT, Garg crop, 1e-3 .. 80 m.
     if (cmd.count("--gt-kind") == 0) args.gt_kind = "depth";
     if (cmd.count("--crop") == 0) args.crop = "garg";
-    if (cmd.count("--fxb") == 0 && cmd.count("--calib") == 0 && args.options.raw_root.empty()) {
-      args.options.kitti_focal_by_width = true;
-    }
   }
   Require(args.options.raw_root.empty() || !args.split_path.empty(),
           "--raw-root gives fx * baseline per split line: it needs --split");
   args.options.pred_kind = ParseMapKind(args.pred_kind);
   args.options.gt_kind = ParseMapKind(args.gt_kind);
   args.options.crop = ParseDepthCrop(args.crop);
+  // With --split, disparities become depths with each line's own calibration under --raw-root (as monodepth's
+  // Eigen evaluation), else with KITTI fx from the GT width times 0.54 m (~1.4 % farther on 2011_09_26); each
+  // stays overridable. Depth against depth needs no fx * baseline, nor a KITTI image width.
+  if (!args.split_path.empty() && ConvertsDisparity(args.options) && cmd.count("--fxb") == 0 &&
+      cmd.count("--calib") == 0 && args.options.raw_root.empty()) {
+    args.options.kitti_focal_by_width = true;
+  }
   if (!args.calib_path.empty()) {
     Require(args.options.fxb <= 0.0 && !args.options.kitti_focal_by_width,
             "give only one of --fxb, --calib, --kitti-focal and --raw-root");
     // Image size does not enter fx * baseline; KITTI's 1241 x 376 keeps Check() satisfied.
-    args.options.fxb = ReadKittiCalibration(args.calib_path, 1241, 376).FxB();
+    args.options.fxb = ReadKittiCalibration(args.calib_path, 1241, 376, ParseCameraPair(args.cameras)).FxB();
   }
   args.options.Check();
   if (!args.json) {
     if (!args.split_path.empty()) std::cout << "split        : " << args.split_path << "\n";
     std::cout << "predictions  : " << args.pred_dir << " (" << MapKindName(args.options.pred_kind) << ")\n"
               << "ground truth : " << args.gt_dir << " (" << MapKindName(args.options.gt_kind) << ")\n";
-    if (args.options.fxb > 0.0) std::cout << "fx * baseline: " << args.options.fxb << " px m\n";
-    if (args.options.kitti_focal_by_width) std::cout << "fx * baseline: KITTI fx by image width x 0.54 m\n";
-    if (!args.options.raw_root.empty())
+    if (!ConvertsDisparity(args.options)) {
+      std::cout << "fx * baseline: not used (depth against depth)\n";
+    } else if (args.options.fxb > 0.0) {
+      std::cout << "fx * baseline: " << args.options.fxb << " px m"
+                << (args.calib_path.empty() ? "" : " (" + args.cameras + " pair of " + args.calib_path + ")") << "\n";
+    } else if (args.options.kitti_focal_by_width) {
+      std::cout << "fx * baseline: KITTI fx by image width x 0.54 m\n";
+    } else if (!args.options.raw_root.empty()) {
       std::cout << "fx * baseline: per split line, from its drive's calib_cam_to_cam.txt under " << args.options.raw_root
                 << "\n";
+    }
     std::cout << "\n";
   }
   const DepthEvalResult result = args.split_path.empty()
@@ -80,8 +89,16 @@ void AddEvalDepthCommand(CLI::App& app) {
   cmd->add_option("--gt-kind", args->gt_kind, "GT holds depth (m) or disparity (px)")->capture_default_str();
   auto* fxb = cmd->add_option("--fxb", args->options.fxb,
                               "focal length (px, GT resolution) * baseline (m) to turn disparity into depth");
-  auto* calib =
-      cmd->add_option("--calib", args->calib_path, "KITTI odometry calib.txt giving fx * baseline (P0, P1)")->excludes(fxb);
+  auto* calib = cmd->add_option("--calib", args->calib_path,
+                                "KITTI odometry calib.txt giving fx * baseline of the pair --cameras names")
+                    ->excludes(fxb);
+  cmd->add_option("--cameras", args->cameras,
+                  "with --calib: the pair the predictions were made on, grey (P0/P1, default: the pair odometry "
+                  "and predict read of an odometry folder) or colour (P2/P3: predict --cameras colour, the "
+                  "network's training pair); on KITTI the colour baseline is ~1 % shorter")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"grey", "gray", "colour", "color"}))
+      ->needs(calib);
   auto* kitti_focal = cmd->add_flag("--kitti-focal", args->options.kitti_focal_by_width,
                 "fx from the GT width (KITTI calibration days, as monodepth) times baseline 0.54 m")
       ->excludes(fxb);

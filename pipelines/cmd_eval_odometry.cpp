@@ -57,7 +57,7 @@ void Run(EvalOdometryArgs& args) {
         WriteOdometryPlots(args.plot_dir, gt, AlignedMatchedEstimate(gt, est, args.options, metrics), metrics);
     std::ostream& note = args.json ? std::cerr : std::cout;
     for (const std::string& path : written) note << "plot written: " << path << "\n";
-    if (metrics.segments == 0) note << "no segment-error plot: the GT path is shorter than the shortest segment\n";
+    if (metrics.segments == 0) note << "no segment-error plot: " << NoKittiSegmentsReason(metrics) << "\n";
   }
 }
 

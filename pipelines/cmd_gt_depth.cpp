@@ -1,6 +1,7 @@
 // `dvso gt-depth`: sparse depth ground truth of a KITTI raw drive, its Velodyne
 // scans projected into a rectified camera (core/kitti_velodyne.h), one KITTI
-// depth PNG (m * 256, 0 = none) per scan, named like the scan.
+// depth PNG (m * 256, 0 = none) per scan, named like the scan; each pixel holds
+// the Velodyne x of its point (monodepth's Eigen-split GT) or its camera z.
 #include <algorithm>
 #include <filesystem>
 #include <iostream>
@@ -24,6 +25,7 @@ namespace fs = std::filesystem;
 
 struct GtDepthArgs {
   std::string drive_dir, out_dir, split_path, raw_root;
+  std::string depth_value = "velodyne-x";
   int camera = 2;
   bool quiet = false;
 };
@@ -41,6 +43,7 @@ std::string ScanPath(const std::string& drive_dir, const std::string& frame_name
 // One GT map per split line, %06d.png in split order, each in its line's camera (l = 02, r = 03).
 void RunSplit(const GtDepthArgs& args) {
   Require(!args.raw_root.empty(), "--split needs --raw-root (the folder holding the date folders)");
+  const VelodyneDepthValue value = ParseVelodyneDepthValue(args.depth_value);
   const std::vector<SplitEntry> entries = ReadSplitFile(args.split_path);
   EnsureDirectory(args.out_dir);
   std::map<std::pair<std::string, int>, VelodyneProjection> projections;  // per (drive, camera)
@@ -56,19 +59,20 @@ void RunSplit(const GtDepthArgs& args) {
       projections[key] = ReadVelodyneProjection(FindRawCalibrationDir(drive_dir), entry.Camera());
     }
     const cv::Mat depth =
-        ProjectVelodyneDepth(ReadVelodyneScan(ScanPath(drive_dir, entry.FrameName())), projections[key]);
+        ProjectVelodyneDepth(ReadVelodyneScan(ScanPath(drive_dir, entry.FrameName())), projections[key], value);
     points += cv::countNonZero(depth);
     WriteKittiMapPng(JoinPath(args.out_dir, SplitMapName(static_cast<int>(i))), depth);
     if (!args.quiet) progress.Update(static_cast<long>(i + 1));
   }
   if (!args.quiet) progress.Finish();
-  std::cout << entries.size() << " depth maps in split order (" << points / static_cast<long>(entries.size())
-            << " points/frame) in " << args.out_dir << "\n";
+  std::cout << entries.size() << " depth maps (" << args.depth_value << ") in split order ("
+            << points / static_cast<long>(entries.size()) << " points/frame) in " << args.out_dir << "\n";
 }
 
 void Run(const GtDepthArgs& args) {
   Require(args.drive_dir.empty() != args.split_path.empty(), "give exactly one of --sequence DRIVE or --split FILE");
   if (!args.split_path.empty()) return RunSplit(args);
+  const VelodyneDepthValue value = ParseVelodyneDepthValue(args.depth_value);
   const fs::path scans_dir = fs::path(args.drive_dir) / "velodyne_points" / "data";
   RequireFile(fs::is_directory(scans_dir), scans_dir.string(),
               "no Velodyne folder (KITTI raw layout: DRIVE/velodyne_points/data/*.bin)");
@@ -84,15 +88,15 @@ void Run(const GtDepthArgs& args) {
   ProgressBar progress("gt-depth", static_cast<long>(scans.size()));
   long points = 0;
   for (size_t i = 0; i < scans.size(); ++i) {
-    const cv::Mat depth = ProjectVelodyneDepth(ReadVelodyneScan(scans[i].string()), projection);
+    const cv::Mat depth = ProjectVelodyneDepth(ReadVelodyneScan(scans[i].string()), projection, value);
     points += cv::countNonZero(depth);
     WriteKittiMapPng(JoinPath(args.out_dir, scans[i].stem().string() + ".png"), depth);
     if (!args.quiet) progress.Update(static_cast<long>(i + 1));
   }
   if (!args.quiet) progress.Finish();
   std::cout << scans.size() << " depth maps (" << projection.width << "x" << projection.height << ", camera "
-            << args.camera << ", " << points / static_cast<long>(scans.size()) << " points/frame) in " << args.out_dir
-            << "\n";
+            << args.camera << ", " << args.depth_value << ", " << points / static_cast<long>(scans.size())
+            << " points/frame) in " << args.out_dir << "\n";
 }
 
 }  // namespace
@@ -119,6 +123,13 @@ void AddGtDepthCommand(CLI::App& app) {
                   "line's side picks it with --split")
       ->capture_default_str()
       ->excludes(split);
+  cmd->add_option("--depth-value", args->depth_value,
+                  "what a pixel holds: velodyne-x (default), the point's forward distance from the Velodyne, as "
+                  "monodepth's and monodepth2's Eigen-split GT (generate_depth_map(..., vel_depth=True)), which "
+                  "published abs-rel numbers use; or camera-z, its depth along the rectified camera's axis (on "
+                  "KITTI ~0.27 m less: the Velodyne sits behind the cameras)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"velodyne-x", "camera-z"}));
   cmd->add_flag("--quiet", args->quiet, "no progress bar");
   cmd->callback([args] { Run(*args); });
 }

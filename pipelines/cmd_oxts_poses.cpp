@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <iostream>
+#include <map>
 #include <memory>
 #include <optional>
 
@@ -24,14 +25,22 @@ struct OxtsPosesArgs {
 };
 
 void Run(const OxtsPosesArgs& args) {
-  const std::vector<Eigen::Isometry3d> packets = OxtsCameraPoses(args.drive_dir, args.camera);
+  // Keyed by file number: packet N is frame N's on a sync drive, and line N of oxts/timestamps.txt is its time.
+  const std::map<long long, Eigen::Isometry3d> packets = OxtsCameraPoses(args.drive_dir, args.camera);
   // One line per frame the odometry keeps: the drive opened as a sequence (the pair of the chosen camera)
   // skips left frames without a right partner (extract drives drop frames), so the trajectory and this
   // file match line by line. Frame names are the file numbers.
   // A drive without images (only oxts/ downloaded) gets one line per packet.
   Trajectory trajectory;
   if (!IsKittiRawDrive(args.drive_dir)) {
-    for (size_t k = 0; k < packets.size(); ++k) trajectory.poses.push_back({static_cast<double>(k), packets[k]});
+    // Line k is packet first + k: a missing packet would move every later pose onto another frame's line.
+    long long expected = packets.begin()->first;
+    for (const auto& [number, pose] : packets) {
+      RequireFile(number == expected, OxtsPacketPath(args.drive_dir, expected),
+                  "missing OXTS packet (one line per packet: the poses after it would land on other frames' lines)");
+      trajectory.poses.push_back({static_cast<double>(number), pose});
+      ++expected;
+    }
     WriteKittiTrajectory(args.out_path, trajectory);
     std::cout << packets.size() << " poses of rectified camera " << args.camera
               << ", one per OXTS packet (the drive has no image_0X/data to match frames with; path "
@@ -40,17 +49,21 @@ void Run(const OxtsPosesArgs& args) {
   }
   const std::unique_ptr<SequenceReader> sequence =
       OpenKittiRawSequence(args.drive_dir, args.camera >= 2 ? CameraPair::kColour : CameraPair::kGrey);
-  // Sync drives: packet k is the one the devkit picked for frame k. Extract drives record the GPS/IMU at
+  // Sync drives: packet N is the one the devkit picked for frame N. Extract drives record the GPS/IMU at
   // 100 Hz and number every stream on its own: the packet nearest in time to the frame's image, as the
   // devkit's synchronisation does.
   const bool by_time = IsKittiRawExtractDrive(args.drive_dir);
-  std::vector<double> packet_times, image_times;
+  std::vector<double> packet_times, image_times;  // packet_times[k]: the k-th packet (by number)'s time
+  std::vector<const Eigen::Isometry3d*> timed_packets;
   if (by_time) {
     const std::string oxts_times_path = JoinPath(args.drive_dir, "oxts/timestamps.txt");
-    packet_times = ReadKittiRawTimestamps(oxts_times_path);
-    RequireFile(packet_times.size() == packets.size(), oxts_times_path,
-                std::to_string(packet_times.size()) + " timestamps for " + std::to_string(packets.size()) +
-                    " OXTS packets");
+    const std::vector<double> lines = ReadKittiRawTimestamps(oxts_times_path);
+    for (const auto& [number, pose] : packets) {
+      RequireFile(number < static_cast<long long>(lines.size()), oxts_times_path,
+                  std::to_string(lines.size()) + " timestamps, none for " + OxtsPacketPath(args.drive_dir, number));
+      packet_times.push_back(lines[static_cast<size_t>(number)]);
+      timed_packets.push_back(&pose);
+    }
     // Frames are named after the pair's LEFT camera (00 or 02): its timestamps, even for --camera 1|3,
     // whose own files are numbered separately once it has dropped a frame.
     const int left_camera = args.camera - args.camera % 2;
@@ -63,19 +76,24 @@ void Run(const OxtsPosesArgs& args) {
   for (int i = 0; i < sequence->size(); ++i) {
     const std::string name = sequence->FrameName(i);
     const std::optional<long long> number = ParseFrameNumber(name);
-    size_t packet = number ? static_cast<size_t>(*number) : packets.size();
+    RequireFile(number.has_value(), args.drive_dir, "frame " + name + " is not named by its file number");
+    Eigen::Isometry3d pose;
     if (by_time) {
-      RequireFile(number && static_cast<size_t>(*number) < image_times.size(), args.drive_dir,
+      RequireFile(static_cast<size_t>(*number) < image_times.size(), args.drive_dir,
                   "frame " + name + " has no line in its camera's timestamps.txt");
       const double image_time = image_times[static_cast<size_t>(*number)];
-      packet = NearestTimestamp(packet_times, image_time);
+      const size_t packet = NearestTimestamp(packet_times, image_time);
       const double gap = std::abs(packet_times[packet] - image_time);
       worst_gap = std::max(worst_gap, gap);
       if (gap > kMaxOxtsFrameGap) ++far_packets;
+      pose = *timed_packets[packet];
+    } else {
+      // An error, not a skipped frame: this file must match the odometry's trajectory line by line.
+      const auto packet = packets.find(*number);
+      RequireFile(packet != packets.end(), OxtsPacketPath(args.drive_dir, *number),
+                  "missing: frame " + name + " has no OXTS packet of its own");
+      pose = packet->second;
     }
-    RequireFile(packet < packets.size(), args.drive_dir,
-                "frame " + name + " has no OXTS packet of its own (" + std::to_string(packets.size()) + " packets)");
-    const Eigen::Isometry3d pose = packets[packet];
     if (i == 0) first_inverse = pose.inverse();
     trajectory.poses.push_back({sequence->timestamps()[i], first_inverse * pose});
   }

@@ -247,6 +247,36 @@ TEST(EvalOdometry, ShortPathHasNoSegmentsButOtherMetrics) {
   EXPECT_EQ(j["ate_rmse"].get<double>(), 0.0);
 }
 
+// Zero segments for want of estimated poses is not a short GT path: the reason says which it is.
+TEST(EvalOdometry, SegmentsDroppedForMissingEstimateFramesAreCountedAndNamed) {
+  const Trajectory gt = StraightLine(300);  // 299 m: segments of 100 and 200 m
+  Trajectory est;
+  for (int i = 0; i < 100; ++i) est.poses.push_back(gt.poses[i]);  // every segment ends at frame >= 101
+  const OdometryMetrics m = EvaluateOdometry(gt, est, {});
+  EXPECT_EQ(m.segments, 0);
+  EXPECT_EQ(m.segments_without_estimate, SegmentsOnLine(300, 100) + SegmentsOnLine(300, 200));
+  EXPECT_EQ(m.segments_without_estimate, 30);
+  const std::string table = FormatOdometryMetrics(m);
+  EXPECT_NE(table.find("the estimate lacks the first or last frame of all 30 segments"), std::string::npos) << table;
+  EXPECT_EQ(table.find("no longer than"), std::string::npos) << table;
+  EXPECT_EQ(OdometryMetricsToJson(m)["segments_without_estimate"].get<int>(), 30);
+  // A short GT path keeps its own reason; a complete estimate drops nothing.
+  const OdometryMetrics short_path = EvaluateOdometry(StraightLine(50), StraightLine(50), {});
+  EXPECT_EQ(short_path.segments_without_estimate, 0);
+  EXPECT_NE(NoKittiSegmentsReason(short_path).find("GT path is no longer than the shortest segment"),
+            std::string::npos);
+  EXPECT_EQ(EvaluateOdometry(gt, gt, {}).segments_without_estimate, 0);
+  // MissingFramesAreReportedAndSkipped's gaps: the dropped segments are what the full estimate has more.
+  Trajectory gappy;
+  for (const StampedPose& p : StraightLine(1001).poses) {
+    const int i = static_cast<int>(p.timestamp);
+    if (!((i >= 5 && i <= 9) || i == 500 || i >= 990)) gappy.poses.push_back(p);
+  }
+  const OdometryMetrics partial = EvaluateOdometry(StraightLine(1001), gappy, {});
+  EXPECT_EQ(partial.segments + partial.segments_without_estimate,
+            EvaluateOdometry(StraightLine(1001), StraightLine(1001), {}).segments);
+}
+
 TEST(EvalOdometry, JsonHasRequiredKeys) {
   OdometryEvalOptions options;
   options.align = AlignmentMode::kSim3;
@@ -281,6 +311,22 @@ TEST(EvalOdometry, WritesBothPlots) {
   const OdometryMetrics short_m = EvaluateOdometry(short_gt, short_gt, options);
   const auto written = WriteOdometryPlots(dir.string(), short_gt, short_gt, short_m);
   ASSERT_EQ(written.size(), 1u);
+  EXPECT_TRUE(fs::exists(dir / "trajectory_xz.png"));
+  EXPECT_FALSE(fs::exists(dir / "segment_errors.png"));
+  fs::remove_all(dir);
+}
+
+// A run without segments must not leave an earlier run's segment_errors.png beside its own top view.
+TEST(EvalOdometry, RunWithoutSegmentsRemovesAnEarlierSegmentPlot) {
+  const fs::path dir = fs::path(dvso::testing::ScratchPath("eval_plots_stale"));
+  fs::remove_all(dir);
+  const Trajectory gt = StraightLine(300);
+  const OdometryMetrics m = EvaluateOdometry(gt, gt, {});
+  ASSERT_EQ(WriteOdometryPlots(dir.string(), gt, gt, m).size(), 2u);
+  ASSERT_TRUE(fs::exists(dir / "segment_errors.png"));
+  const Trajectory short_gt = StraightLine(50);
+  const OdometryMetrics short_m = EvaluateOdometry(short_gt, short_gt, {});
+  EXPECT_EQ(WriteOdometryPlots(dir.string(), short_gt, short_gt, short_m).size(), 1u);
   EXPECT_TRUE(fs::exists(dir / "trajectory_xz.png"));
   EXPECT_FALSE(fs::exists(dir / "segment_errors.png"));
   fs::remove_all(dir);

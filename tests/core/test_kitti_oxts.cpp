@@ -7,6 +7,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
 
 #include "core/error.h"
 #include "core/kitti_oxts.h"
@@ -92,19 +93,19 @@ TEST(KittiOxts, SyntheticDriveRoundTripsThroughCalibrationAndCli) {
     WriteOxtsPacket((drive / "oxts" / "data" / name).string(), PoseToOxts(mercator_from_imu, scale));
   }
 
-  const std::vector<Eigen::Isometry3d> poses = OxtsCameraPoses(drive.string(), 2);
+  const std::map<long long, Eigen::Isometry3d> poses = OxtsCameraPoses(drive.string(), 2);
   ASSERT_EQ(poses.size(), static_cast<size_t>(kFrames));
   double worst = 0.0;
   for (int i = 0; i < kFrames; ++i) {
     const Eigen::Isometry3d expected = world_from_camera[0].inverse() * world_from_camera[i];
-    worst = std::max(worst, (poses[i].translation() - expected.translation()).norm());
-    EXPECT_TRUE(poses[i].linear().isApprox(expected.linear(), 1e-9)) << "frame " << i;
+    worst = std::max(worst, (poses.at(i).translation() - expected.translation()).norm());
+    EXPECT_TRUE(poses.at(i).linear().isApprox(expected.linear(), 1e-9)) << "frame " << i;
   }
   EXPECT_LT(worst, 1e-5) << "m";  // ~4e-6 m: atan(exp(y / r)) of a y of ~5.6e6 m in doubles
   // Camera 00 differs from 02 by the rectified baseline offset only (0.06 m along x).
-  const std::vector<Eigen::Isometry3d> grey = OxtsCameraPoses(drive.string(), 0);
-  EXPECT_NEAR((grey[10].translation() - poses[10].translation()).norm(), 0.0, 0.2);
-  EXPECT_GT((grey[10].translation() - poses[10].translation()).norm(), 1e-4);
+  const std::map<long long, Eigen::Isometry3d> grey = OxtsCameraPoses(drive.string(), 0);
+  EXPECT_NEAR((grey.at(10).translation() - poses.at(10).translation()).norm(), 0.0, 0.2);
+  EXPECT_GT((grey.at(10).translation() - poses.at(10).translation()).norm(), 1e-4);
 
   // The CLI writes the same poses as a KITTI file.
   const std::string out = (tmp.path / "poses.txt").string();
@@ -112,7 +113,52 @@ TEST(KittiOxts, SyntheticDriveRoundTripsThroughCalibrationAndCli) {
   ASSERT_EQ(run.exit_code, 0) << run.out;
   const Trajectory written = ReadTrajectory(out);
   ASSERT_EQ(written.size(), static_cast<size_t>(kFrames));
-  EXPECT_LT((written.poses[kFrames - 1].T_world_camera.translation() - poses[kFrames - 1].translation()).norm(), 1e-9);
+  EXPECT_LT((written.poses[kFrames - 1].T_world_camera.translation() - poses.at(kFrames - 1).translation()).norm(),
+            1e-9);
+
+  // A missing packet keeps the others on their own frame numbers; without images (one line per packet) it is
+  // an error naming it, since every later line would otherwise hold the next frame's pose.
+  fs::remove(drive / "oxts" / "data" / "0000000005.txt");
+  const std::map<long long, Eigen::Isometry3d> gappy = OxtsCameraPoses(drive.string(), 2);
+  ASSERT_EQ(gappy.size(), static_cast<size_t>(kFrames - 1));
+  EXPECT_EQ(gappy.count(5), 0u);
+  EXPECT_LT((gappy.at(6).translation() - poses.at(6).translation()).norm(), 1e-9);
+  const testing::CliRun gap_run =
+      testing::RunDvso("oxts-poses --sequence " + drive.string() + " --camera 2 --out " + out);
+  EXPECT_EQ(gap_run.exit_code, 1);
+  EXPECT_NE(gap_run.out.find("0000000005.txt"), std::string::npos) << gap_run.out;
+}
+
+// A damaged sync download: frame 5 gone from every camera and from oxts/data. The frames keep their file
+// numbers, so frame 6's line holds packet 6's pose, not packet 7's (the position in the packet list would
+// shift every later pose); a kept frame whose packet is missing is an error naming the packet.
+TEST(KittiOxts, SyncDrivePacketsAreTakenByFrameNumber) {
+  const std::string dir = testing::FreshSimulatedSequence("oxts_gap", 12, "--color --raw-layout sync");
+  ASSERT_FALSE(dir.empty()) << "dvso simulate --raw-layout sync failed";
+  const fs::path seq = fs::path(dir) / "seq";
+  const fs::path drive = seq / "kitti_raw" / "2011_09_26" / "2011_09_26_drive_0001_sync";
+  ASSERT_TRUE(fs::is_directory(drive / "oxts" / "data"));
+  for (const char* camera : {"image_00", "image_01", "image_02", "image_03"}) {
+    fs::remove(drive / camera / "data" / "0000000005.png");
+  }
+  fs::remove(drive / "oxts" / "data" / "0000000005.txt");
+  const fs::path out = fs::path(dir) / "oxts_poses.txt";
+  testing::CliRun run = testing::RunDvso("oxts-poses --sequence " + drive.string() + " --camera 0 --out " +
+                                         out.string());
+  ASSERT_EQ(run.exit_code, 0) << run.out;
+  const Trajectory oxts = ReadTrajectory(out.string(), TrajectoryFormat::kKitti);
+  const Trajectory gt = ReadTrajectory((seq / "poses.txt").string(), TrajectoryFormat::kKitti);
+  ASSERT_EQ(oxts.size(), 11u);
+  for (size_t line = 0; line < oxts.size(); ++line) {
+    const size_t frame = line < 5 ? line : line + 1;
+    const Eigen::Isometry3d error = gt.poses[frame].T_world_camera.inverse() * oxts.poses[line].T_world_camera;
+    EXPECT_LT(error.translation().norm(), 1e-4) << "line " << line << ", frame " << frame;
+  }
+  // Frame 8 keeps its images but loses its packet: an error naming the packet, not a shifted pose.
+  fs::remove(drive / "oxts" / "data" / "0000000008.txt");
+  run = testing::RunDvso("oxts-poses --sequence " + drive.string() + " --camera 0 --out " + out.string());
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_NE(run.out.find("0000000008.txt"), std::string::npos) << run.out;
 }
 
 TEST(KittiOxts, NearestTimestampNeedsNoSortedTimes) {

@@ -57,7 +57,7 @@ TEST(KittiVelodyne, ScanProjectsToTheNearestDepthPerPixelLikeTheHandProjection) 
   const VelodyneProjection projection = ReadVelodyneProjection(tmp.path.string(), 2);
   ASSERT_EQ(projection.width, 1242);
   ASSERT_EQ(projection.height, 375);
-  const cv::Mat depth = ProjectVelodyneDepth(scan, projection);
+  const cv::Mat depth = ProjectVelodyneDepth(scan, projection, VelodyneDepthValue::kCameraZ);
   EXPECT_EQ(cv::countNonZero(depth), static_cast<int>(expected.size()));
   int near_pixels = 0;
   for (const auto& [pixel, z] : expected) {
@@ -80,12 +80,65 @@ TEST(KittiVelodyne, ScanProjectsToTheNearestDepthPerPixelLikeTheHandProjection) 
   ASSERT_EQ(from_text.size(), scan.size());
   EXPECT_TRUE(from_text[17].isApprox(scan[17], 1e-6f));
   const testing::CliRun run =
-      testing::RunDvso("gt-depth --quiet --sequence " + drive.string() + " --out " + (tmp.path / "gt").string());
+      testing::RunDvso("gt-depth --quiet --depth-value camera-z --sequence " + drive.string() + " --out " +
+                       (tmp.path / "gt").string());
   ASSERT_EQ(run.exit_code, 0) << run.out;
   const cv::Mat png = ReadKittiMapPng((tmp.path / "gt" / "0000000000.png").string());
   for (const auto& [pixel, z] : expected) {
     EXPECT_NEAR(png.at<float>(static_cast<int>(pixel.first), static_cast<int>(pixel.second)), z, 0.5 / 256 + 1e-4);
   }
+}
+
+// The default GT value is monodepth's and monodepth2's (generate_depth_map(..., vel_depth=True)): the
+// Velodyne forward distance x of the point that hits the pixel, not the camera z (on the KITTI-like rig
+// z ~= x - 0.27 m); the nearest point is the one with the smallest x, as monodepth's min over duplicates.
+TEST(KittiVelodyne, DefaultDepthValueIsTheVelodyneForwardDistanceAsMonodepth) {
+  TempDir tmp("velo_x");
+  const testing::RawCalibration calib = testing::WriteRawCalibration(tmp.path);
+  const VelodyneProjection projection = ReadVelodyneProjection(tmp.path.string(), 2);
+  // Points ahead of the Velodyne, far apart in the image, and one more behind the first on camera 02's ray
+  // through it (P_rect_02 = K [I | t]: the ray's points are s (X + t) - t), which the nearer one hides.
+  std::vector<VelodynePoint> scan = {{10.0f, 1.0f, -0.5f, 0.5f}, {25.0f, -3.0f, 0.2f, 0.5f},
+                                     {6.5f, 0.0f, -1.0f, 0.5f}, {20.0f, -6.0f, -1.0f, 0.5f}};
+  const Eigen::Isometry3d rect_from_velo =
+      testing::Rigid(calib.rect, Eigen::Vector3d::Zero()) * calib.cam0_from_velo;
+  const Eigen::Vector3d t = calib.P_rect_02.leftCols<3>().inverse() * calib.P_rect_02.col(3);
+  const Eigen::Vector3d near = rect_from_velo * scan[0].head<3>().cast<double>();
+  const Eigen::Vector3f hidden = (rect_from_velo.inverse() * (1.5 * (near + t) - t)).cast<float>();
+  scan.emplace_back(hidden.x(), hidden.y(), hidden.z(), 0.5f);
+  const cv::Mat x_map = ProjectVelodyneDepth(scan, projection);
+  const cv::Mat z_map = ProjectVelodyneDepth(scan, projection, VelodyneDepthValue::kCameraZ);
+  EXPECT_EQ(cv::countNonZero(x_map), 4);
+  EXPECT_EQ(cv::countNonZero(z_map), 4);
+  for (size_t i = 0; i < 4; ++i) {
+    const VelodynePoint& p = scan[i];
+    const Eigen::Vector3d x = projection.velo_to_image * Eigen::Vector4d(p.x(), p.y(), p.z(), 1.0);
+    const int u = static_cast<int>(std::lround(x.x() / x.z())), v = static_cast<int>(std::lround(x.y() / x.z()));
+    ASSERT_TRUE(u >= 0 && v >= 0 && u < projection.width && v < projection.height) << i;
+    EXPECT_FLOAT_EQ(x_map.at<float>(v, u), p.x()) << i;
+    EXPECT_NEAR(z_map.at<float>(v, u), x.z(), 1e-4) << i;
+    // The rig puts the Velodyne 0.27 m behind camera 00: the two conventions differ by about that.
+    EXPECT_NEAR(p.x() - z_map.at<float>(v, u), 0.27, 0.05) << i;
+  }
+  EXPECT_THROW(ParseVelodyneDepthValue("depth"), Error);
+
+  // Through the CLI: the default writes x, --depth-value camera-z writes z.
+  const fs::path drive = tmp.path / "2011_09_26_drive_0003_sync";
+  fs::create_directories(drive / "velodyne_points" / "data");
+  WriteVelodyneScan((drive / "velodyne_points" / "data" / "0000000000.bin").string(), scan);
+  for (const std::string& value : {std::string(), std::string("camera-z")}) {
+    const fs::path out = tmp.path / ("gt" + value);
+    const testing::CliRun run = testing::RunDvso("gt-depth --quiet --sequence " + drive.string() + " --out " +
+                                                 out.string() + (value.empty() ? "" : " --depth-value " + value));
+    ASSERT_EQ(run.exit_code, 0) << run.out;
+    const cv::Mat png = ReadKittiMapPng((out / "0000000000.png").string());
+    const cv::Mat& expected = value.empty() ? x_map : z_map;
+    EXPECT_LE(cv::norm(png, expected, cv::NORM_INF), 0.5 / 256 + 1e-4) << value;
+  }
+  const testing::CliRun bad = testing::RunDvso("gt-depth --quiet --depth-value z --sequence " + drive.string() +
+                                               " --out " + (tmp.path / "bad").string());
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_NE(bad.out.find("--depth-value"), std::string::npos) << bad.out;
 }
 
 TEST(KittiVelodyne, BadScanIsOneClearError) {
