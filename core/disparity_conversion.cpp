@@ -56,17 +56,9 @@ double InverseDepthFromDisparity(double disparity_px, double fx, double virtual_
   return disparity_px / (fx * virtual_baseline);
 }
 
-double VirtualBaselineForCamera(const ModelMetadata& model, double fx, int width, bool tuned) {
+double VirtualBaselineOfModel(const ModelMetadata& model, bool tuned) {
   Require(model.has_camera(), "the model carries no training camera (baseline, fx/width): pass --virtual-baseline");
-  Require(fx > 0 && width > 0, "VirtualBaselineForCamera: camera fx and width must be > 0");
-  const double baseline = tuned && model.tuned_baseline > 0 ? model.tuned_baseline : model.baseline;
-  return baseline * model.fx_over_width / (fx / width);
-}
-
-double TrainingCameraBaseline(const ModelMetadata& model, double virtual_baseline, double fx, int width) {
-  Require(model.has_camera(), "the model carries no training camera (baseline, fx/width)");
-  Require(fx > 0 && width > 0, "TrainingCameraBaseline: camera fx and width must be > 0");
-  return virtual_baseline * (fx / width) / model.fx_over_width;
+  return tuned && model.tuned_baseline > 0 ? model.tuned_baseline : model.baseline;
 }
 
 float LeftRightDisparityError(const cv::Mat& disparity_left, const cv::Mat& disparity_right, int u, int v) {
@@ -78,9 +70,10 @@ float LeftRightDisparityError(const cv::Mat& disparity_left, const cv::Mat& disp
   if (!(x >= 0.0f) || x > disparity_right.cols - 1) return kInvalid;
   const int x0 = std::min(static_cast<int>(x), disparity_right.cols - 2);
   const float fx = x - x0;
-  const float r0 = disparity_right.at<float>(v, x0);
-  const float r1 = disparity_right.at<float>(v, x0 + 1);
-  if (!(r0 > 0 && r1 > 0) || !std::isfinite(r0) || !std::isfinite(r1)) return kInvalid;
+  // Only taps with weight enter: p' on a pixel centre needs that pixel alone.
+  const float r0 = fx < 1.0f ? disparity_right.at<float>(v, x0) : 0.0f;
+  const float r1 = fx > 0.0f ? disparity_right.at<float>(v, x0 + 1) : 0.0f;
+  if ((fx < 1.0f && !(r0 > 0 && std::isfinite(r0))) || (fx > 0.0f && !(r1 > 0 && std::isfinite(r1)))) return kInvalid;
   return std::abs(d_left - ((1.0f - fx) * r0 + fx * r1));
 }
 

@@ -5,18 +5,21 @@
 // Units. A network trained on images of width W_t taken by a camera with focal
 // length f_t and stereo baseline b_t learns the disparity as a FRACTION of the
 // image width, delta = f_t b_t / (W_t Z) (monodepth convention; `dvso export`
-// multiplies by the input width to output pixels). Shown an image of another
-// camera (f_x, W), it still answers with the fraction it would have seen for
-// the training camera, so in this image's pixels D = delta W and
+// multiplies by the input width to output pixels, and the image's own width
+// turns it into pixels of the image: D = delta W).
 //
-//     Z = (f_t / W_t) b_t W / D,   d = 1 / Z = D / (f_x b_v),
-//     b_v = b_t (f_t / W_t) / (f_x / W)                       (virtual baseline)
-//
-// i.e. the paper's d_p = D^L(p) / (f_x b) with the training baseline rescaled
-// by the ratio of the two cameras' focal length per image width. For the
-// training camera itself (or any camera with the same f_x / W, e.g. every
-// KITTI sequence at full resolution) b_v = b_t. Images are resized to the
-// network input, so the image height does not enter.
+// Virtual baseline: b_v = b_t for EVERY camera, and d = 1 / Z = D / (f_x b_v).
+// Why not rescaled by the cameras' focal length per width: the network reads
+// depth from image cues measured in fractions of the width (the apparent size
+// s f_x / (W Z) of an object of size s, the height of its ground contact
+// h f_x / (W Z) below the horizon), so shown a camera with another f_x / W it
+// perceives Z' = Z (f_t / W_t) / (f_x / W) (the focal-length ambiguity of
+// monocular depth) and answers delta = (f_t / W_t) b_t / Z' = (f_x / W) b_t / Z,
+// i.e. D = f_x b_t / Z in the image's pixels: the camera's focal length is in the
+// prediction already. Measured (session 24, docs/dvso.md): simulated streets seen
+// with 1.5x and 0.7x KITTI's f_x, shipped model: Sim(3) scale 0.99 with b_v = b_t,
+// 1.48 / 0.70 with b_v rescaled by (f_t / W_t) / (f_x / W) as before session 24.
+// The training camera's f_t / W_t stays in the metadata to describe the model.
 #pragma once
 
 #include <opencv2/core.hpp>
@@ -51,12 +54,9 @@ struct ModelMetadata {
 // disparities give 0 (no depth).
 double InverseDepthFromDisparity(double disparity_px, double fx, double virtual_baseline);
 
-// b_v for a camera with focal length fx and image width `width` (header
-// comment), from the training baseline, or from the tuned one when `tuned`
-// and the model carries one.
-double VirtualBaselineForCamera(const ModelMetadata& model, double fx, int width, bool tuned = false);
-// The inverse: a b_v found for that camera expressed for the training camera.
-double TrainingCameraBaseline(const ModelMetadata& model, double virtual_baseline, double fx, int width);
+// b_v of a model for any camera (header comment): the training baseline, or the
+// tuned one when `tuned` and the model carries one.
+double VirtualBaselineOfModel(const ModelMetadata& model, bool tuned = false);
 
 // Paper section 4 (left-right check): e_lr = |D^L(p) - D^R(p')|, p' = p - (D^L(p), 0),
 // D^R sampled bilinearly. Returns +infinity when D^L(p) or any D^R tap is

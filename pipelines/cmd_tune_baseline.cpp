@@ -58,7 +58,7 @@ void AddTuneBaselineCommand(CLI::App& app) {
     if (write_model) {
       // --virtual-baseline skips this check when the source is opened; the stamped b_v needs it.
       RequireFile(setup.predictions.metadata.has_camera(), model,
-                  "carries no training camera (baseline, fx/width) to express the tuned b_v for: --write-model "
+                  "carries no training camera (baseline, fx/width) to stamp the tuned b_v beside: --write-model "
                   "needs a model from `dvso export`");
     }
     const double default_bv = setup.default_virtual_baseline;
@@ -67,15 +67,14 @@ void AddTuneBaselineCommand(CLI::App& app) {
     const size_t n = setup.sequences.size();
     if (write_model) {
       ModelMetadata metadata = setup.predictions.metadata;
-      const PinholeCamera& cam = setup.first().camera().left;
-      metadata.tuned_baseline = TrainingCameraBaseline(metadata, search.best, cam.fx, cam.width);
+      metadata.tuned_baseline = search.best;  // b_v is the same for every camera (core/disparity_conversion.h)
       std::string tuned_on;
       for (const ExperimentSequence& s : setup.sequences) tuned_on += (tuned_on.empty() ? "" : ", ") + s.path;
       if (experiment.count > 0) tuned_on += " (first " + std::to_string(experiment.count) + " frames of each)";
       metadata.tuned_on = tuned_on;
       WriteModelWithTunedBaseline(model, args->write_model, metadata);
       (experiment.json ? std::cerr : std::cout) << "wrote " << args->write_model << " (tuned baseline "
-                                                << metadata.tuned_baseline << " m for the training camera)\n";
+                                                << metadata.tuned_baseline << " m, used for every camera)\n";
     }
     if (experiment.json) {
       nlohmann::json j;

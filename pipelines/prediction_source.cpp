@@ -26,7 +26,8 @@ void AddPredictionOptions(CLI::App* cmd, PredictionSourceArgs* args, const std::
                   "(N,H,W) normalised by width");
   cmd->add_option("--disparity-right", args->disparity_right, "dvso: precomputed D^R (same format)");
   cmd->add_option("--virtual-baseline", args->virtual_baseline,
-                  "dvso: b_v in metres (default: from the model's training camera, or the sequence's baseline for files)")
+                  "dvso: b_v in metres (default: the model's training baseline, or its tuned one, for every camera; the "
+                  "sequence's baseline for files)")
       ->check(Positive());
   cmd->add_option("--prediction-schedule", args->schedule,
                   "dvso: keyframe-async (a keyframe's prediction runs on a worker while the next frames are tracked) | "
@@ -86,8 +87,8 @@ PredictionSource OpenPredictionSource(const PredictionSourceArgs& args, const Se
     } else {
       RequireFile(metadata.has_camera(), model,
                   "the model carries no training camera (re-export it with `dvso export`, or pass --virtual-baseline)");
-      out.untuned_virtual_baseline = VirtualBaselineForCamera(metadata, cam.fx, cam.width, /*tuned=*/false);
-      out.virtual_baseline = VirtualBaselineForCamera(metadata, cam.fx, cam.width, /*tuned=*/true);
+      out.untuned_virtual_baseline = VirtualBaselineOfModel(metadata, /*tuned=*/false);
+      out.virtual_baseline = VirtualBaselineOfModel(metadata, /*tuned=*/true);
       out.tuned = metadata.tuned_baseline > 0;
     }
     out.metadata = metadata;

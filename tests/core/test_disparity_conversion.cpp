@@ -29,28 +29,24 @@ TEST(DisparityConversion, InverseDepthIsDisparityOverFocalTimesBaseline) {
   EXPECT_THROW(InverseDepthFromDisparity(10.0, 720.0, 0.0), Error);
 }
 
-TEST(DisparityConversion, VirtualBaselineFollowsFocalLengthPerWidth) {
+TEST(DisparityConversion, VirtualBaselineIsTheTrainingBaselineForEveryCamera) {
   ModelMetadata model;
   model.baseline = 0.54;
   model.fx_over_width = 720.0 / 1240.0;
-  // Same camera (or a resized copy of it): b_v = training baseline.
-  EXPECT_NEAR(VirtualBaselineForCamera(model, 720.0, 1240), 0.54, 1e-12);
-  EXPECT_NEAR(VirtualBaselineForCamera(model, 360.0, 620), 0.54, 1e-12);
-  // A camera with twice the focal length per width (narrower field of view):
-  // the network still answers the training camera's fraction, so a point at
-  // Z gives D = f_t b_t W / (W_t Z) pixels and d = D / (f_x b_v) needs b_v = b_t / 2.
-  EXPECT_NEAR(VirtualBaselineForCamera(model, 1440.0, 1240), 0.27, 1e-12);
-  // End to end: Z = 20 m seen by that camera.
-  const double fraction = model.fx_over_width * model.baseline / 20.0;
-  const double disparity_px = fraction * 1240;
-  EXPECT_NEAR(InverseDepthFromDisparity(disparity_px, 1440.0, VirtualBaselineForCamera(model, 1440.0, 1240)),
-              1.0 / 20.0, 1e-12);
-  EXPECT_THROW(VirtualBaselineForCamera(ModelMetadata{}, 720.0, 1240), Error);
-  // Paper "tb": a tuned baseline is used when asked for, converted the same way, and the inverse round-trips.
+  EXPECT_NEAR(VirtualBaselineOfModel(model), 0.54, 1e-12);
+  // A camera with twice the focal length per width (narrower field of view) sees an object at Z = 20 m
+  // as large as the training camera saw it at 10 m: the network perceives Z' = Z (f_t/W_t) / (f_x/W) and
+  // answers the training camera's fraction for Z', which in this camera's pixels is f_x b_t / Z.
+  const double fx = 1440.0, width = 1240.0, depth = 20.0;
+  const double perceived = depth * model.fx_over_width / (fx / width);
+  EXPECT_NEAR(perceived, 10.0, 1e-12);
+  const double disparity_px = model.fx_over_width * model.baseline / perceived * width;
+  EXPECT_NEAR(InverseDepthFromDisparity(disparity_px, fx, VirtualBaselineOfModel(model)), 1.0 / depth, 1e-12);
+  EXPECT_THROW(VirtualBaselineOfModel(ModelMetadata{}), Error);
+  // Paper "tb": a tuned baseline is used when asked for, for every camera alike.
   model.tuned_baseline = 0.6;
-  EXPECT_NEAR(VirtualBaselineForCamera(model, 1440.0, 1240, /*tuned=*/true), 0.3, 1e-12);
-  EXPECT_NEAR(VirtualBaselineForCamera(model, 1440.0, 1240, /*tuned=*/false), 0.27, 1e-12);
-  EXPECT_NEAR(TrainingCameraBaseline(model, 0.3, 1440.0, 1240), 0.6, 1e-12);
+  EXPECT_NEAR(VirtualBaselineOfModel(model, /*tuned=*/true), 0.6, 1e-12);
+  EXPECT_NEAR(VirtualBaselineOfModel(model, /*tuned=*/false), 0.54, 1e-12);
 }
 
 TEST(DisparityConversion, LeftRightErrorComparesWithTheRightMapAtTheMatch) {
@@ -69,6 +65,11 @@ TEST(DisparityConversion, LeftRightErrorComparesWithTheRightMapAtTheMatch) {
   EXPECT_TRUE(std::isinf(LeftRightDisparityError(left, right, 3, 0)));  // 3 - 5 < 0
   right.at<float>(3, 5) = 0.0f;
   EXPECT_TRUE(std::isinf(LeftRightDisparityError(left, right, 10, 3)));
+  // p' on a pixel centre needs that pixel alone: an invalid neighbour (weight 0) does not matter.
+  right.at<float>(0, 6) = 0.0f;
+  EXPECT_FLOAT_EQ(LeftRightDisparityError(left, right, 10, 0), 0.0f);
+  right.at<float>(0, 5) = 0.0f;
+  EXPECT_TRUE(std::isinf(LeftRightDisparityError(left, right, 10, 0)));
 }
 
 TEST(DisparityConversion, SanitizeZeroesNaNAndNegatives) {

@@ -222,6 +222,31 @@ TEST(BackendJacobians, VirtualStereoValueMatchesEq58) {
   }
 }
 
+// Points sit on integer rows and the virtual right camera keeps the row, so the bilinear sample of D^R
+// gives the row below weight 0: an invalid pixel there (a file map's hole, a NaN) must not remove the
+// residual. Row v + 3 is below every pattern row (offsets -2..2) and used by none.
+TEST(BackendJacobians, VirtualStereoIgnoresAnInvalidRowItsSampleGivesNoWeight) {
+  Fixture f = MakeFixture(Ramp, false, true);
+  const int id = f.window->AddPoint(0, 62.0f, 187.0f, 0.25);
+  ASSERT_GE(id, 0);
+  cv::Mat& disparity = f.window->mutable_keyframes()[0].right_disparity;
+  disparity.row(190).setTo(0.0f);
+  const Keyframe& host = f.window->keyframe(0);
+  const Point& p = host.points.back();
+  ResidualEvaluation ev;
+  EvaluateResidual(GeometryFor(f, ResidualKind::kVirtualStereo), p, p.idepth, f.options, false, &ev);
+  ASSERT_EQ(ev.state, ResidualState::kActive);
+  for (int k = 0; k < kPatternSize; ++k) {
+    const double u = p.u + kPatternOffsets[k][0], v = p.v + kPatternOffsets[k][1];
+    const double u_dagger = u - f.camera.left.fx * f.options.virtual_stereo_baseline * p.idepth;
+    EXPECT_NEAR(ev.r(k), Ramp(u_dagger + 20.0 + 0.05 * u_dagger + 0.01 * v, v) - Ramp(u, v), 2e-3);
+  }
+  // A pattern row itself invalid still removes it.
+  disparity.row(189).setTo(0.0f);
+  EvaluateResidual(GeometryFor(f, ResidualKind::kVirtualStereo), p, p.idepth, f.options, false, &ev);
+  EXPECT_NE(ev.state, ResidualState::kActive);
+}
+
 TEST(BackendJacobians, VirtualStereoJacobianMatchesFiniteDifferences) {
   for (const auto& fn : {std::function<float(double, double)>(Ramp), std::function<float(double, double)>(Waves)}) {
     Fixture f = MakeFixture(fn, false, true);

@@ -64,6 +64,7 @@ class PointCollector : public OdometryObserver {
 struct DvsoRun {
   Trajectory estimate;
   int lost = 0;
+  int keyframes = 0;
   std::vector<PointInfo> first_points;
 };
 
@@ -82,6 +83,7 @@ DvsoRun RunDvso(DisparitySource* source, OdometryOptions options, int frames = k
   r.estimate = recorder.Resolve();
   r.lost = recorder.CountStatus(FrameStatus::kLost);
   r.first_points = points.first;
+  r.keyframes = system.num_keyframes_total();
   return r;
 }
 
@@ -237,6 +239,9 @@ TEST(DvsoMode, EveryPredictionTimingOnAWorkerStaysMetric) {
     }
     if (timing == "keyframe-async") {
       EXPECT_GT(worker.prefetched_used(), 5);  // attached after the keyframe was made
+      // Every keyframe's prediction is collected, the last one's too (at Finish: a model error there
+      // must fail the run, not vanish with the worker's result).
+      EXPECT_EQ(worker.prefetched_used() + worker.computed_on_demand(), r.keyframes);
     }
   }
 }

@@ -13,7 +13,11 @@ void SetIntrinsics(const PinholeCamera& camera, ResidualGeometry* g) {
 }
 
 // Bilinear sample of a CV_32F map with its x derivative (of the bilinear
-// interpolant). False when outside or any of the 4 taps is invalid (<= 0).
+// interpolant). False when outside or a tap that enters is invalid (<= 0, NaN).
+// Points sit on integer rows, and the virtual right camera keeps the row: the
+// lower row's weight is then 0 and it is not asked for (an invalid pixel below
+// a valid one must not remove the residual). Both columns are always needed:
+// the derivative is their difference.
 bool SampleDisparity(const cv::Mat& map, float x, float y, float* value, float* dx) {
   if (!(x >= 0.0f && y >= 0.0f && x < map.cols - 1 && y < map.rows - 1)) return false;
   const int ix = static_cast<int>(x);
@@ -21,9 +25,16 @@ bool SampleDisparity(const cv::Mat& map, float x, float y, float* value, float* 
   const float fx = x - ix;
   const float fy = y - iy;
   const float* row0 = map.ptr<float>(iy) + ix;
+  const float d00 = row0[0], d01 = row0[1];
+  if (!(d00 > 0.0f && d01 > 0.0f)) return false;  // also rejects NaN
+  if (fy == 0.0f) {
+    *value = (1 - fx) * d00 + fx * d01;
+    *dx = d01 - d00;
+    return true;
+  }
   const float* row1 = map.ptr<float>(iy + 1) + ix;
-  const float d00 = row0[0], d01 = row0[1], d10 = row1[0], d11 = row1[1];
-  if (!(d00 > 0.0f && d01 > 0.0f && d10 > 0.0f && d11 > 0.0f)) return false;  // also rejects NaN
+  const float d10 = row1[0], d11 = row1[1];
+  if (!(d10 > 0.0f && d11 > 0.0f)) return false;
   *value = (1 - fy) * ((1 - fx) * d00 + fx * d01) + fy * ((1 - fx) * d10 + fx * d11);
   *dx = (1 - fy) * (d01 - d00) + fy * (d11 - d10);
   return true;

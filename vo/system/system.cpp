@@ -331,6 +331,9 @@ void System::ResetAfterLoss(int frame_index, const Eigen::Isometry3d& predicted)
 void System::Finish() {
   if (finished_) return;
   finished_ = true;
+  // The last keyframe's keyframe-async prediction is collected too: a failing model must fail the run
+  // (its error would otherwise be dropped with the worker's result), and every request gets its answer.
+  AttachPendingPrediction(/*wait=*/true);
   FlushWindow();
   for (OdometryObserver* o : observers_) o->OnFinished();
 }
