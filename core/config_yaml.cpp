@@ -1,8 +1,36 @@
 #include "core/config_yaml.h"
 
 #include <filesystem>
+#include <set>
 
 namespace dvso {
+
+void RequireUniqueKeys(const YAML::Node& node, const std::string& origin, const std::string& prefix) {
+  if (node.IsMap()) {
+    std::set<std::string> keys;
+    for (const auto& entry : node) {
+      const std::string key = entry.first.IsScalar() ? entry.first.Scalar() : std::string("<complex key>");
+      const std::string where = prefix.empty() ? key : prefix + "." + key;
+      if (!keys.insert(key).second) throw Error(origin, "config key '" + where + "' appears twice");
+      RequireUniqueKeys(entry.second, origin, where);
+    }
+  } else if (node.IsSequence()) {
+    for (size_t i = 0; i < node.size(); ++i) {
+      RequireUniqueKeys(node[i], origin, prefix + "[" + std::to_string(i) + "]");
+    }
+  }
+}
+
+void RequireDecimalInteger(const YAML::Node& scalar, const std::string& origin, const std::string& key) {
+  if (!scalar.IsScalar()) return;  // as<T>() reports the type mismatch
+  std::string text = scalar.Scalar();
+  if (!text.empty() && (text[0] == '+' || text[0] == '-')) text.erase(0, 1);
+  if (text.size() > 1 && text[0] == '0') {
+    const std::string message = "key '" + key + "': '" + scalar.Scalar() +
+                                "' is not a decimal integer (YAML would read a leading 0 as octal, 0x as hex)";
+    throw origin.empty() ? Error(message) : Error(origin, message);
+  }
+}
 
 YamlSection::YamlSection(YAML::Node node, std::string origin, std::string prefix)
     : node_(std::move(node)), origin_(std::move(origin)), prefix_(std::move(prefix)) {
@@ -15,7 +43,9 @@ YamlSection::YamlSection(YAML::Node node, std::string origin, std::string prefix
 YamlSection YamlSection::FromFile(const std::string& path) {
   RequireFile(std::filesystem::is_regular_file(path), path, "config file does not exist");
   try {
-    return YamlSection(YAML::LoadFile(path), path, "");
+    YAML::Node root = YAML::LoadFile(path);
+    RequireUniqueKeys(root, path);
+    return YamlSection(root, path, "");
   } catch (const YAML::Exception& e) {
     throw Error(path, std::string("invalid YAML: ") + e.what());
   }
@@ -23,7 +53,9 @@ YamlSection YamlSection::FromFile(const std::string& path) {
 
 YamlSection YamlSection::FromString(const std::string& text, const std::string& origin) {
   try {
-    return YamlSection(YAML::Load(text), origin, "");
+    YAML::Node root = YAML::Load(text);
+    RequireUniqueKeys(root, origin);
+    return YamlSection(root, origin, "");
   } catch (const YAML::Exception& e) {
     throw Error(origin, std::string("invalid YAML: ") + e.what());
   }

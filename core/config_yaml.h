@@ -13,11 +13,21 @@
 #include <memory>
 #include <set>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "core/error.h"
 
 namespace dvso {
+
+// yaml-cpp keeps every copy of a repeated key and node[key] answers the first, so a repeated
+// `active_points:` (or a second `tracker:` section, whose keys no check would then see) is silently
+// half-ignored. Throws dvso::Error(origin, ...) naming the first repeated key, at any depth.
+void RequireUniqueKeys(const YAML::Node& node, const std::string& origin, const std::string& prefix = "");
+
+// yaml-cpp reads integers with a leading 0 as octal (`0100` = 64) and accepts hex (`0x10`); a config
+// value means what it says in decimal. Throws dvso::Error(origin, ...) naming `key` otherwise.
+void RequireDecimalInteger(const YAML::Node& scalar, const std::string& origin, const std::string& key);
 
 class YamlSection {
  public:
@@ -36,6 +46,7 @@ class YamlSection {
     if (child.IsNull()) {
       throw Error(origin_, "key '" + Where(key) + "' has no value (give one, or remove the key for the default)");
     }
+    if constexpr (std::is_integral_v<T> && !std::is_same_v<T, bool>) RequireDecimalInteger(child, origin_, Where(key));
     try {
       *value = child.as<T>();
     } catch (const YAML::Exception& e) {

@@ -57,8 +57,52 @@ std::vector<std::string> ListImages(const std::string& directory) {
       files.push_back(entry.path().string());
     }
   }
-  std::sort(files.begin(), files.end());
+  std::sort(files.begin(), files.end(), NaturalLess);
   return files;
+}
+
+bool NaturalLess(const std::string& a, const std::string& b) {
+  const auto is_digit = [](char c) { return c >= '0' && c <= '9'; };
+  size_t i = 0, j = 0;
+  while (i < a.size() && j < b.size()) {
+    if (is_digit(a[i]) && is_digit(b[j])) {
+      size_t i_end = i, j_end = j;
+      while (i_end < a.size() && is_digit(a[i_end])) ++i_end;
+      while (j_end < b.size() && is_digit(b[j_end])) ++j_end;
+      size_t i_start = i, j_start = j;  // the number without leading zeros
+      while (i_start + 1 < i_end && a[i_start] == '0') ++i_start;
+      while (j_start + 1 < j_end && b[j_start] == '0') ++j_start;
+      const size_t i_len = i_end - i_start, j_len = j_end - j_start;
+      if (i_len != j_len) return i_len < j_len;
+      const int order = a.compare(i_start, i_len, b, j_start, j_len);
+      if (order != 0) return order < 0;
+      if (i_end - i != j_end - j) return i_end - i < j_end - j;  // 7 before 007: a total order
+      i = i_end, j = j_end;
+    } else {
+      if (a[i] != b[j]) return a[i] < b[j];
+      ++i, ++j;
+    }
+  }
+  return a.size() - i < b.size() - j;
+}
+
+cv::Size FirstDecodableImageSize(const std::vector<std::string>& files) {
+  RequireFile(!files.empty(), "", "no images");
+  const size_t probes = std::min(files.size(), static_cast<size_t>(kSizeProbeFrames));
+  for (size_t i = 0; i < probes; ++i) {
+    const cv::Mat image = cv::imread(files[i], cv::IMREAD_UNCHANGED);
+    if (!image.empty()) return image.size();
+  }
+  throw Error(files[0], "cannot decode image (nor any of the " + std::to_string(probes) + " first frames)");
+}
+
+void RequireImagesOfCalibratedSize(const std::vector<std::string>& files, cv::Size calibrated,
+                                   const std::string& calibration) {
+  const cv::Size size = FirstDecodableImageSize(files);
+  RequireFile(size == calibrated, calibration,
+              "gives images of " + std::to_string(calibrated.width) + "x" + std::to_string(calibrated.height) +
+                  ", but " + std::filesystem::path(files[0]).parent_path().string() + " holds " +
+                  std::to_string(size.width) + "x" + std::to_string(size.height) + " images");
 }
 
 bool SameRectifiedCamera(const std::vector<double>& p, const std::vector<double>& q) {

@@ -13,8 +13,20 @@ namespace dvso::internal {
 cv::Mat LoadGreyImage(const std::string& path, cv::Size expected = {});
 // Loads an image as CV_8UC3 (BGR); same checks.
 cv::Mat LoadColorImage(const std::string& path, cv::Size expected = {});
-// Sorted list of image files (png, jpg, jpeg, pgm, bmp) in a directory.
+// Image files (png, jpg, jpeg, pgm, bmp; any case) of a directory in natural order: digit runs compare
+// as numbers, so 1.png 2.png 10.png stay in that order (zero-padded KITTI names sort as before).
 std::vector<std::string> ListImages(const std::string& directory);
+// Natural order of two file names (ListImages).
+bool NaturalLess(const std::string& a, const std::string& b);
+// The size of the first of `files` that decodes (up to kSizeProbeFrames of them): a damaged first
+// frame is a lost frame of the run, not a sequence that cannot be opened. Throws dvso::Error naming
+// the first file when none of them decodes.
+inline constexpr int kSizeProbeFrames = 10;
+cv::Size FirstDecodableImageSize(const std::vector<std::string>& files);
+// Throws dvso::Error naming `calibration` when the images are not of the size it gives: a mismatch
+// would otherwise make every frame unreadable, one warning at a time.
+void RequireImagesOfCalibratedSize(const std::vector<std::string>& files, cv::Size calibrated,
+                                   const std::string& calibration);
 // Whether two rectified 3x4 projection matrices (row-major, 12 numbers, KITTI's P = K [I | t]) describe the
 // same camera: equal intrinsics and centre. On KITTI the colour cameras sit ~6 cm beside the grey ones
 // (P2[0][3] != P0[0][3]), so their images are another viewpoint; our simulator renders colour at the grey centres.

@@ -85,6 +85,7 @@ EurocCamera ReadEurocCamera(const std::string& cam_dir) {
     cam.files.push_back(JoinPath(JoinPath(cam_dir, "data"), file));
   }
   RequireFile(!cam.files.empty(), csv_path, "no frames listed");
+  internal::RequireImagesOfCalibratedSize(cam.files, cam.size, yaml_path);
   return cam;
 }
 
@@ -198,6 +199,7 @@ class ImageFolderSequence : public SequenceReader {
     RequireFile(!files_.empty(), root, "no images found");
     camera_.left = ReadDsoCameraFile(camera_file);
     camera_.baseline = 0.0;
+    internal::RequireImagesOfCalibratedSize(files_, cv::Size(camera_.left.width, camera_.left.height), camera_file);
     const std::string times = JoinPath(root, "times.txt");
     if (fs::is_regular_file(times)) {
       timestamps_ = ReadTimes(times);

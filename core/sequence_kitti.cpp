@@ -122,12 +122,7 @@ bool KittiColourMatchesGrey(const std::string& calib_path) {
 }
 
 void WriteKittiCalibration(const std::string& calib_path, const StereoCamera& camera) {
-  WriteAtomically(calib_path, [&](const std::string& temp) {
-    std::ofstream out(temp);
-    RequireFile(out.good(), calib_path, "cannot write calibration file");
-    out << KittiCalibrationText(camera);
-    RequireFile(out.good(), calib_path, "cannot write calibration file");
-  });
+  WriteStreamAtomically(calib_path, [&](std::ostream& out) { out << KittiCalibrationText(camera); });
 }
 
 namespace {
@@ -148,8 +143,8 @@ class KittiSequence : public SequenceReader {
     right_dir_ = JoinPath(root, colour_is_left ? "image_3" : "image_1");
     files_ = internal::ListImages(left_dir_);
     RequireFile(!files_.empty(), left_dir_, "no images found");
-    const cv::Mat first = internal::LoadGreyImage(files_[0]);
-    camera_ = ReadKittiCalibration(calib, first.cols, first.rows,
+    const cv::Size size = internal::FirstDecodableImageSize(files_);
+    camera_ = ReadKittiCalibration(calib, size.width, size.height,
                                    colour_is_left ? CameraPair::kColour : CameraPair::kGrey);
     stereo_ = camera_.baseline > 0 && fs::is_directory(right_dir_);
     // Colour beside the grey pair only when it was taken from the same centres (CameraPair).

@@ -142,9 +142,9 @@ class KittiRawSequence : public SequenceReader {
       camera_.left.width = static_cast<int>(std::lround(size[0]));
       camera_.left.height = static_cast<int>(std::lround(size[1]));
     } else {
-      const cv::Mat first = internal::LoadGreyImage(left.files[0]);
-      camera_.left.width = first.cols;
-      camera_.left.height = first.rows;
+      const cv::Size first = internal::FirstDecodableImageSize(left.files);
+      camera_.left.width = first.width;
+      camera_.left.height = first.height;
     }
     try {
       camera_.left.Check();

@@ -503,6 +503,37 @@ TEST(SequenceReader, MonocularFolderNeedsCameraFile) {
   EXPECT_TRUE(seq->Read(1).right.empty());
 }
 
+// Frames named without zero padding run in numeric order (text order put 10 before 2), and a camera
+// file whose size the images do not have is an error at open (every frame was "unreadable" before).
+TEST(SequenceReader, ImageFolderRunsInNumericOrderAndChecksTheCameraSize) {
+  const std::string root = TempDir("natural_order");
+  for (int i : {1, 2, 3, 10, 11}) cv::imwrite(root + "/" + std::to_string(i) + ".png", RandomImage(30, 20, i));
+  const std::string camfile = TempDir("natural_order_cam") + "/camera.txt";
+  WriteDsoCameraFile(camfile, PinholeCamera{40, 40, 15, 10, 30, 20});
+  auto seq = OpenSequence(root, camfile);
+  std::vector<std::string> names;
+  for (int i = 0; i < seq->size(); ++i) names.push_back(seq->FrameName(i));
+  EXPECT_EQ(names, (std::vector<std::string>{"1", "2", "3", "10", "11"}));
+  WriteDsoCameraFile(camfile, PinholeCamera{80, 80, 30, 20, 60, 40});
+  try {
+    OpenSequence(root, camfile);
+    ADD_FAILURE() << "a camera file of another size was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("30x20"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("camera.txt"), std::string::npos) << e.what();
+  }
+  // Natural order: numbers by value, zero-padded names as before, text elsewhere, a total order.
+  using internal::NaturalLess;
+  EXPECT_TRUE(NaturalLess("img2.png", "img10.png"));
+  EXPECT_FALSE(NaturalLess("img10.png", "img2.png"));
+  EXPECT_TRUE(NaturalLess("000009.png", "000010.png"));
+  EXPECT_TRUE(NaturalLess("a1.png", "b0.png"));
+  EXPECT_TRUE(NaturalLess("7.png", "007.png"));
+  EXPECT_FALSE(NaturalLess("007.png", "7.png"));
+  EXPECT_FALSE(NaturalLess("x.png", "x.png"));
+  EXPECT_TRUE(NaturalLess("x", "x1"));
+}
+
 TEST(YamlSection, StrictKeysAndNestedSections) {
   YamlSection s = YamlSection::FromString("points: 800\ntracker:\n  levels: 4\n", "cfg");
   int points = 2000, levels = 5;
@@ -540,4 +571,42 @@ TEST(YamlSection, StrictKeysAndNestedSections) {
       EXPECT_NE(std::string(e.what()).find("has no value"), std::string::npos) << e.what();
     }
   }
+}
+
+// yaml-cpp keeps repeated keys and answers the first: `points` given twice loaded the first value, and
+// a second `tracker:` section hid its keys from the unknown-key check.
+TEST(YamlSection, RepeatedKeysAreErrorsAtAnyDepth) {
+  for (const auto& [text, key] : std::vector<std::pair<std::string, std::string>>{
+           {"points: 100\npoints: 3000\n", "'points'"},
+           {"tracker:\n  levels: 4\ntracker:\n  bogus: 1\n", "'tracker'"},
+           {"tracker:\n  levels: 4\n  levels: 5\n", "'tracker.levels'"},
+           {"stages:\n  - name: a\n    name: b\n", "'stages[0].name'"}}) {
+    try {
+      YamlSection::FromString(text, "cfg");
+      ADD_FAILURE() << "accepted: " << text;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("appears twice"), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_NO_THROW(YamlSection::FromString("a:\n  x: 1\nb:\n  x: 2\n", "cfg"));  // same key in two maps
+}
+
+// yaml-cpp reads 0100 as octal 64 and 0x10 as 16: an integer option must be written in decimal.
+TEST(YamlSection, IntegersAreDecimal) {
+  int points = 0;
+  for (const char* text : {"points: 0100\n", "points: 0x10\n", "points: -010\n"}) {
+    YamlSection s = YamlSection::FromString(text, "cfg");
+    EXPECT_THROW(s.Read("points", &points), Error) << text;
+  }
+  for (const auto& [text, value] : std::vector<std::pair<std::string, int>>{
+           {"points: 0\n", 0}, {"points: 100\n", 100}, {"points: -7\n", -7}, {"points: +8\n", 8}}) {
+    YamlSection s = YamlSection::FromString(text, "cfg");
+    ASSERT_NO_THROW(s.Read("points", &points)) << text;
+    EXPECT_EQ(points, value) << text;
+  }
+  double ratio = 0;  // floating-point values keep their leading zeros
+  YamlSection s = YamlSection::FromString("ratio: 0.05\n", "cfg");
+  s.Read("ratio", &ratio);
+  EXPECT_DOUBLE_EQ(ratio, 0.05);
 }

@@ -228,6 +228,25 @@ TEST(SystemSimulated, DamagedFrameIsCountedAsLostAndTheRunGoesOnUnlessStrict) {
                                              seq + " --out " + dir + "/strict_again");
   EXPECT_EQ(failed.exit_code, 1);
   EXPECT_TRUE(std::filesystem::exists(dir + "/strict_again/INTERRUPTED"));
+  // A run whose frames are all unreadable is an error, not a trajectory of identities.
+  const auto none = dvso::testing::RunDvso("odometry --mode stereo --preset fast --no-progress --first 7 --count 1 "
+                                           "--sequence " + seq + " --out " + dir + "/none");
+  EXPECT_EQ(none.exit_code, 1);
+  EXPECT_NE(none.out.find("none of the 1 frames could be read"), std::string::npos) << none.out;
+  // An earlier run's point cloud does not stay beside a run that wrote none.
+  const std::string ply_run = "odometry --mode stereo --preset fast --no-progress --count 5 --sequence " + seq +
+                              " --out " + dir + "/ply";
+  ASSERT_EQ(dvso::testing::RunDvso(ply_run + " --ply").exit_code, 0);
+  ASSERT_TRUE(std::filesystem::exists(dir + "/ply/points.ply"));
+  ASSERT_EQ(dvso::testing::RunDvso(ply_run).exit_code, 0);
+  EXPECT_FALSE(std::filesystem::exists(dir + "/ply/points.ply"));
+  // A damaged FIRST frame is a lost frame too: the sequence still opens (its size comes from the next).
+  std::ofstream(seq + "/image_0/000000.png") << "not a png either";
+  const auto first = dvso::testing::RunDvso("odometry --mode stereo --preset fast --no-progress --count 5 --sequence " +
+                                            seq + " --out " + dir + "/first");
+  EXPECT_EQ(first.exit_code, 0) << first.out;
+  EXPECT_NE(first.out.find("warning: frame 0 skipped"), std::string::npos) << first.out;
+  EXPECT_EQ(ReadTrajectory(dir + "/first/trajectory.txt", TrajectoryFormat::kKitti).size(), 5u);
 }
 
 TEST(SystemSimulated, InterruptWritesTheFramesProcessedAndAMarker) {

@@ -94,7 +94,7 @@ void RunLogWriter::OnFrameTracked(const FrameEvent& e) {
 
 void RunLogWriter::OnFinished() {
   out_.flush();
-  RequireFile(out_.good(), partial_path_, "write failed");
+  RequireFile(out_.good(), path_, "write failed (disk full?)");
   out_.close();
   RequireFile(std::rename(partial_path_.c_str(), path_.c_str()) == 0, path_, "cannot rename the finished run log");
   finished_ = true;

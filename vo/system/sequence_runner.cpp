@@ -20,9 +20,15 @@
 namespace dvso::vo {
 
 namespace {
-// Set by SIGINT / SIGTERM while a run that asked for it is in progress.
+// Set by SIGINT / SIGTERM while a run that asked for it is in progress. The first signal asks the run
+// to stop and write what it has; the handler then gives the signal its default action back, so a
+// second Ctrl-C during a long finish ends the process (atomic writes leave no truncated file).
+// signal() is async-signal-safe (POSIX).
 volatile std::sig_atomic_t g_interrupt_requested = 0;
-extern "C" void RequestInterrupt(int) { g_interrupt_requested = 1; }
+extern "C" void RequestInterrupt(int signal_number) {
+  g_interrupt_requested = 1;
+  std::signal(signal_number, SIG_DFL);
+}
 
 // Installs the handlers for the lifetime of a run and restores the old ones.
 class InterruptScope {
@@ -129,6 +135,8 @@ SequenceRunSummary RunOdometryOnSequence(const SequenceReader& sequence, const O
       bar->Update(i - run.first + 1, status.str());
     }
   }
+  RequireFile(summary.frames == 0 || summary.unreadable < summary.frames, sequence.root(),
+              "none of the " + std::to_string(summary.frames) + " frames could be read (warnings above)");
   system.Finish();
   summary.wall_ms = summary.frames > 0 ? std::chrono::duration<double, std::milli>(
                                              std::chrono::steady_clock::now() - loop_start).count() / summary.frames
@@ -149,6 +157,8 @@ SequenceRunSummary RunOdometryOnSequence(const SequenceReader& sequence, const O
   } else {
     std::filesystem::remove(JoinPath(out_dir, "INTERRUPTED"));
   }
+  // An earlier run's point cloud beside this run's trajectory would pass for this run's.
+  if (!run.write_ply) std::filesystem::remove(JoinPath(out_dir, "points.ply"));
   summary.keyframes = system.num_keyframes_total();
   summary.lost = recorder.CountStatus(FrameStatus::kLost) + recorder.CountStatus(FrameStatus::kUnreadable);
   summary.initializing = recorder.CountStatus(FrameStatus::kInitializing);
