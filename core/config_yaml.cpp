@@ -25,7 +25,10 @@ void RequireDecimalInteger(const YAML::Node& scalar, const std::string& origin, 
   if (!scalar.IsScalar()) return;  // as<T>() reports the type mismatch
   std::string text = scalar.Scalar();
   if (!text.empty() && (text[0] == '+' || text[0] == '-')) text.erase(0, 1);
-  if (text.size() > 1 && text[0] == '0') {
+  const bool octal = text.size() > 1 && text[0] == '0' &&
+                     text.find_first_not_of("0123456789") == std::string::npos;
+  const bool hex = text.size() > 2 && text[0] == '0' && (text[1] == 'x' || text[1] == 'X');
+  if (octal || hex) {  // anything else that is no integer (0.5) is reported by the conversion
     const std::string message = "key '" + key + "': '" + scalar.Scalar() +
                                 "' is not a decimal integer (YAML would read a leading 0 as octal, 0x as hex)";
     throw origin.empty() ? Error(message) : Error(origin, message);

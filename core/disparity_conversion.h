@@ -8,18 +8,26 @@
 // multiplies by the input width to output pixels, and the image's own width
 // turns it into pixels of the image: D = delta W).
 //
-// Virtual baseline: b_v = b_t for EVERY camera, and d = 1 / Z = D / (f_x b_v).
-// Why not rescaled by the cameras' focal length per width: the network reads
-// depth from image cues measured in fractions of the width (the apparent size
-// s f_x / (W Z) of an object of size s, the height of its ground contact
-// h f_x / (W Z) below the horizon), so shown a camera with another f_x / W it
-// perceives Z' = Z (f_t / W_t) / (f_x / W) (the focal-length ambiguity of
-// monocular depth) and answers delta = (f_t / W_t) b_t / Z' = (f_x / W) b_t / Z,
-// i.e. D = f_x b_t / Z in the image's pixels: the camera's focal length is in the
-// prediction already. Measured (session 24, docs/dvso.md): simulated streets seen
-// with 1.5x and 0.7x KITTI's f_x, shipped model: Sim(3) scale 0.99 with b_v = b_t,
-// 1.48 / 0.70 with b_v rescaled by (f_t / W_t) / (f_x / W) as before session 24.
-// The training camera's f_t / W_t stays in the metadata to describe the model.
+// Virtual baseline: b_v = b_t (or the tuned one) whatever the camera's focal
+// length, and d = 1 / Z = D / (f_x b_v). Why not rescaled by the cameras' focal
+// length per width: the network reads depth from image cues measured in
+// fractions of the image (the apparent size s f / (W Z) of an object of size s,
+// the height h f_y / (H Z) of its ground contact below the horizon), so shown a
+// camera with another focal length it perceives Z' = Z (f_t / W_t) / (f_x / W)
+// (the focal-length ambiguity of monocular depth) and answers
+// delta = (f_t / W_t) b_t / Z' = (f_x / W) b_t / Z, i.e. D = f_x b_t / Z in the
+// image's pixels: the camera's focal length is in the prediction already.
+// This holds when the horizontal and vertical cues agree, i.e. the image has the
+// training images' shape (f_x / W : f_y / H as for the training camera; every
+// KITTI-like camera). An image of another aspect ratio is squeezed into the
+// network's input, the two kinds of cue then imply different depths, and no
+// formula of the metadata gives the answer: `dvso tune-baseline` on a sequence
+// with ground truth does. Measured (session 24, docs/dvso.md): simulated streets
+// at 1241x376 seen with 1.5x and 0.7x KITTI's focal length (f_x = f_y), shipped
+// model: Sim(3) scale 1.009 / 1.117 with b_v = b_t (0.54 m), 0.974 / 1.079 with
+// its tuned 0.56 m; 1.51 at 1.5x with the b_v of the pre-session-24 rule
+// b_v = b_t (f_t / W_t) / (f_x / W). The training camera's f_t / W_t stays in the
+// metadata to describe the model.
 #pragma once
 
 #include <opencv2/core.hpp>

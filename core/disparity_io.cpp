@@ -16,6 +16,7 @@
 
 #include "core/error.h"
 #include "core/fs_util.h"
+#include "core/image_file.h"
 
 namespace dvso {
 
@@ -56,9 +57,7 @@ void WriteKittiMapPng(const std::string& path, const cv::Mat& map) {
       }
     }
   }
-  WriteAtomically(path, [&](const std::string& temp) {
-    RequireFile(cv::imwrite(temp, out), path, "cannot write PNG");
-  });
+  WriteImageAtomically(path, out);
 }
 
 namespace {

@@ -7,6 +7,7 @@
 #include "core/error.h"
 #include "core/eval_odometry.h"
 #include "core/fs_util.h"
+#include "core/image_file.h"
 #include "core/plot.h"
 
 namespace dvso {
@@ -82,9 +83,7 @@ std::vector<std::string> WriteOdometryPlots(const std::string& dir, const Trajec
   const cv::Mat r_image = RenderPlot({r_series}, panel);
   cv::Mat both;
   cv::hconcat(t_image, r_image, both);
-  WriteAtomically(segment_path, [&](const std::string& temp) {
-    RequireFile(cv::imwrite(temp, both), segment_path, "cannot write PNG plot");
-  });
+  WriteImageAtomically(segment_path, both);
   written.push_back(segment_path);
   return written;
 }

@@ -18,6 +18,7 @@
 #include "core/disparity_io.h"
 #include "core/error.h"
 #include "core/fs_util.h"
+#include "core/image_file.h"
 #include "core/kitti_oxts.h"
 #include "core/kitti_velodyne.h"
 #include "core/progress.h"
@@ -90,9 +91,7 @@ std::string ReadWholeFile(const std::string& path) {
 }
 
 void WritePng(const std::string& path, const cv::Mat& image) {
-  WriteAtomically(path, [&](const std::string& temp) {
-    RequireFile(cv::imwrite(temp, image, {cv::IMWRITE_PNG_COMPRESSION, 1}), path, "cannot write PNG");
-  });
+  WriteImageAtomically(path, image, {cv::IMWRITE_PNG_COMPRESSION, 1});
 }
 
 void WriteRigid(std::ostream& out, const Eigen::Isometry3d& T) {

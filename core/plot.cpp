@@ -9,6 +9,7 @@
 
 #include "core/error.h"
 #include "core/fs_util.h"
+#include "core/image_file.h"
 
 namespace dvso {
 
@@ -186,9 +187,7 @@ cv::Mat RenderPlot(const std::vector<PlotSeries>& series, const PlotOptions& opt
 
 void WritePlotPng(const std::string& path, const std::vector<PlotSeries>& series, const PlotOptions& options) {
   const cv::Mat image = RenderPlot(series, options);
-  WriteAtomically(path, [&](const std::string& temp) {
-    RequireFile(cv::imwrite(temp, image), path, "cannot write PNG plot");
-  });
+  WriteImageAtomically(path, image);
 }
 
 }  // namespace dvso

@@ -61,23 +61,60 @@ std::vector<std::string> ListImages(const std::string& directory) {
   return files;
 }
 
+namespace {
+
+bool IsDigit(char c) { return c >= '0' && c <= '9'; }
+
+// The number that starts at `pos`: its integer digits without leading zeros, and the digits after a
+// decimal point when one follows (timestamps as names: 1317042130.25.png). `end` is one past it.
+struct NameNumber {
+  std::string integer, fraction;
+  size_t end = 0;
+  size_t digits = 0;  // every digit character it spans (leading zeros too)
+};
+
+NameNumber ReadNameNumber(const std::string& s, size_t pos) {
+  NameNumber n;
+  size_t i = pos;
+  while (i < s.size() && IsDigit(s[i])) ++i;
+  size_t start = pos;
+  while (start + 1 < i && s[start] == '0') ++start;
+  n.integer = s.substr(start, i - start);
+  n.digits = i - pos;
+  if (i + 1 < s.size() && s[i] == '.' && IsDigit(s[i + 1])) {
+    size_t f = i + 1;
+    while (f < s.size() && IsDigit(s[f])) ++f;
+    n.fraction = s.substr(i + 1, f - i - 1);
+    n.digits += f - i - 1;
+    i = f;
+  }
+  n.end = i;
+  return n;
+}
+
+// -1, 0, 1 by value: integers by length then digits, fractions digit by digit (".25" < ".3").
+int CompareNameNumbers(const NameNumber& a, const NameNumber& b) {
+  if (a.integer.size() != b.integer.size()) return a.integer.size() < b.integer.size() ? -1 : 1;
+  if (const int c = a.integer.compare(b.integer); c != 0) return c < 0 ? -1 : 1;
+  const size_t n = std::max(a.fraction.size(), b.fraction.size());
+  for (size_t k = 0; k < n; ++k) {
+    const char x = k < a.fraction.size() ? a.fraction[k] : '0';
+    const char y = k < b.fraction.size() ? b.fraction[k] : '0';
+    if (x != y) return x < y ? -1 : 1;
+  }
+  return 0;
+}
+
+}  // namespace
+
 bool NaturalLess(const std::string& a, const std::string& b) {
-  const auto is_digit = [](char c) { return c >= '0' && c <= '9'; };
   size_t i = 0, j = 0;
   while (i < a.size() && j < b.size()) {
-    if (is_digit(a[i]) && is_digit(b[j])) {
-      size_t i_end = i, j_end = j;
-      while (i_end < a.size() && is_digit(a[i_end])) ++i_end;
-      while (j_end < b.size() && is_digit(b[j_end])) ++j_end;
-      size_t i_start = i, j_start = j;  // the number without leading zeros
-      while (i_start + 1 < i_end && a[i_start] == '0') ++i_start;
-      while (j_start + 1 < j_end && b[j_start] == '0') ++j_start;
-      const size_t i_len = i_end - i_start, j_len = j_end - j_start;
-      if (i_len != j_len) return i_len < j_len;
-      const int order = a.compare(i_start, i_len, b, j_start, j_len);
-      if (order != 0) return order < 0;
-      if (i_end - i != j_end - j) return i_end - i < j_end - j;  // 7 before 007: a total order
-      i = i_end, j = j_end;
+    if (IsDigit(a[i]) && IsDigit(b[j])) {
+      const NameNumber x = ReadNameNumber(a, i), y = ReadNameNumber(b, j);
+      if (const int c = CompareNameNumbers(x, y); c != 0) return c < 0;
+      if (x.digits != y.digits) return x.digits < y.digits;  // 7 before 007, 1.5 before 1.50: a total order
+      i = x.end, j = y.end;
     } else {
       if (a[i] != b[j]) return a[i] < b[j];
       ++i, ++j;

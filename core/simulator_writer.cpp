@@ -24,6 +24,7 @@
 #include "core/disparity_io.h"
 #include "core/error.h"
 #include "core/fs_util.h"
+#include "core/image_file.h"
 #include "core/progress.h"
 #include "core/sequence.h"
 #include "core/simulator.h"
@@ -33,9 +34,7 @@ namespace dvso {
 namespace {
 
 void WritePng(const std::string& path, const cv::Mat& image) {
-  WriteAtomically(path, [&](const std::string& temp) {
-    RequireFile(cv::imwrite(temp, image, {cv::IMWRITE_PNG_COMPRESSION, 1}), path, "cannot write PNG");
-  });
+  WriteImageAtomically(path, image, {cv::IMWRITE_PNG_COMPRESSION, 1});
 }
 
 void WriteText(const std::string& path, const std::function<void(std::ostream&)>& body) {

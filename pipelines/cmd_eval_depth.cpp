@@ -95,7 +95,7 @@ void AddEvalDepthCommand(CLI::App& app) {
   cmd->add_option("--cameras", args->cameras,
                   "with --calib: the pair the predictions were made on, grey (P0/P1, default: the pair odometry "
                   "and predict read of an odometry folder) or colour (P2/P3: predict --cameras colour, the "
-                  "network's training pair); on KITTI the colour baseline is ~1 % shorter")
+                  "network's training pair); on KITTI the two pairs' baselines differ by up to ~1 %")
       ->capture_default_str()
       ->check(CLI::IsMember({"grey", "gray", "colour", "color"}))
       ->needs(calib);

@@ -9,6 +9,7 @@
 #include "core/disparity_io.h"
 #include "core/error.h"
 #include "core/fs_util.h"
+#include "core/image_file.h"
 #include "pipelines/commands.h"
 #include "sdso_labels/label_error_kinds.h"
 #include "sdso_labels/label_stats.h"
@@ -60,8 +61,7 @@ void Run(const EvalLabelsArgs& args) {
     }
     if (!args.pictures_dir.empty()) {
       const std::string picture = (fs::path(args.pictures_dir) / file.filename()).string();
-      RequireFile(cv::imwrite(picture, labels::RenderLabelErrors(label_map, gt, image, args.kinds.wrong_threshold)),
-                  picture, "cannot write");
+      WriteImageAtomically(picture, labels::RenderLabelErrors(label_map, gt, image, args.kinds.wrong_threshold));
     }
     statistics.AddFrame(label_map, gt);
     breakdown.AddFrame(label_map, gt, image);

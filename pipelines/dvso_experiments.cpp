@@ -155,8 +155,9 @@ ExperimentSetup OpenExperiment(const ExperimentArgs& args) {
     const int frames = args.count < 0 ? s.reader->size() : std::min(args.count, s.reader->size());
     RequireFile(static_cast<int>(s.gt.size()) >= frames, args.gts[i],
                 "has " + std::to_string(s.gt.size()) + " poses for " + std::to_string(frames) + " frames");
-    if (!setup.sequences.empty()) {
-      // b_v is in metres of this camera's geometry (d = D / (f_x b_v), D scaled with the width).
+    if (!setup.sequences.empty() && !args.predictions.disparity_left.empty()) {
+      // Disparity files are in their own sequence's stereo geometry: one b_v grid needs one camera. (A
+      // model's b_v is the same for every camera: core/disparity_conversion.h.)
       const PinholeCamera& a = setup.first().camera().left;
       const PinholeCamera& b = s.reader->camera().left;
       RequireFile(std::abs(a.fx - b.fx) < 1e-6 * a.fx && a.width == b.width, s.path,

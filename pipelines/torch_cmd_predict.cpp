@@ -17,6 +17,7 @@
 #include "core/disparity_io.h"
 #include "core/error.h"
 #include "core/fs_util.h"
+#include "core/image_file.h"
 #include "core/progress.h"
 #include "core/sequence.h"
 #include "core/sequence_common.h"
@@ -92,9 +93,7 @@ void RunPredict(const PredictArgs& args) {
       for (const bool left : {true, false}) {
         const std::string path = JoinPath(JoinPath(args.out, left ? "left_color" : "right_color"), name);
         const cv::Mat preview = stacknet::ColorizeDisparity(left ? pair.left : pair.right);
-        WriteAtomically(path, [&](const std::string& temp) {
-          RequireFile(cv::imwrite(temp, preview), path, "cannot write the preview PNG");
-        });
+        WriteImageAtomically(path, preview);
       }
     } else {
       // A preview of this name from an earlier run no longer shows this map: remove it, not leave it beside.

@@ -242,11 +242,23 @@ TEST(FsUtil, WriteThatFailsAtCloseLeavesNoFile) {
     EXPECT_NE(std::string(e.what()).find(dir + "/trajectory.txt"), std::string::npos) << e.what();
     EXPECT_EQ(std::string(e.what()).find(kAtomicWriteTag), std::string::npos) << "names the temporary file";
   }
+  // cv::imwrite ignores its close too: a 16-bit map of noise (~20 KB) reported success cut at 512 bytes.
+  cv::Mat map(100, 100, CV_32F);
+  cv::randu(map, 1.0f, 200.0f);
+  bool map_threw = false;
+  try {
+    WriteKittiMapPng(dir + "/map.png", map);
+  } catch (const Error&) {
+    map_threw = true;
+  }
   setrlimit(RLIMIT_FSIZE, &saved);
   std::signal(SIGXFSZ, previous);
   EXPECT_TRUE(threw);
+  EXPECT_TRUE(map_threw);
   EXPECT_FALSE(fs::exists(dir + "/trajectory.txt"));
   EXPECT_FALSE(fs::exists(dir + "/trajectory.tmp-writing.txt"));
+  EXPECT_FALSE(fs::exists(dir + "/map.png"));
+  EXPECT_FALSE(fs::exists(dir + "/map.tmp-writing.png"));
   // Without the limit the same call writes every pose.
   WriteKittiTrajectory(dir + "/trajectory.txt", trajectory);
   EXPECT_EQ(ReadTrajectory(dir + "/trajectory.txt", TrajectoryFormat::kKitti).size(), 20u);
@@ -532,6 +544,14 @@ TEST(SequenceReader, ImageFolderRunsInNumericOrderAndChecksTheCameraSize) {
   EXPECT_FALSE(NaturalLess("007.png", "7.png"));
   EXPECT_FALSE(NaturalLess("x.png", "x.png"));
   EXPECT_TRUE(NaturalLess("x", "x1"));
+  // Timestamps as names: the digits after a decimal point are a fraction, not a number (.25 < .3).
+  EXPECT_TRUE(NaturalLess("100.25.png", "100.3.png"));
+  EXPECT_FALSE(NaturalLess("100.3.png", "100.25.png"));
+  EXPECT_TRUE(NaturalLess("1317042130.175304.png", "1317042130.21173.png"));
+  EXPECT_TRUE(NaturalLess("100.png", "100.25.png"));
+  EXPECT_TRUE(NaturalLess("99.9.png", "100.png"));
+  EXPECT_TRUE(NaturalLess("1.5.png", "1.50.png"));
+  EXPECT_FALSE(NaturalLess("1.50.png", "1.5.png"));
 }
 
 TEST(YamlSection, StrictKeysAndNestedSections) {

@@ -21,13 +21,16 @@ namespace dvso::vo {
 
 namespace {
 // Set by SIGINT / SIGTERM while a run that asked for it is in progress. The first signal asks the run
-// to stop and write what it has; the handler then gives the signal its default action back, so a
-// second Ctrl-C during a long finish ends the process (atomic writes leave no truncated file).
+// to stop and write what it has; the handler then gives both signals their default action back, so a
+// second one during a long finish ends the process at once. What that kill leaves is not a finished
+// run: no INTERRUPTED marker, possibly temporary files (*.tmp-writing*, run_log.csv.partial) and a new
+// run log beside the old trajectory; every file in place is complete (atomic writes).
 // signal() is async-signal-safe (POSIX).
 volatile std::sig_atomic_t g_interrupt_requested = 0;
-extern "C" void RequestInterrupt(int signal_number) {
+extern "C" void RequestInterrupt(int) {
   g_interrupt_requested = 1;
-  std::signal(signal_number, SIG_DFL);
+  std::signal(SIGINT, SIG_DFL);
+  std::signal(SIGTERM, SIG_DFL);
 }
 
 // Installs the handlers for the lifetime of a run and restores the old ones.
