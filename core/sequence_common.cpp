@@ -123,6 +123,36 @@ bool NaturalLess(const std::string& a, const std::string& b) {
   return a.size() - i < b.size() - j;
 }
 
+std::vector<std::string> FillNumberedFrameGaps(const std::vector<std::string>& files, size_t count) {
+  namespace fs = std::filesystem;
+  if (files.empty()) return files;
+  const fs::path first(files.front());
+  const std::string extension = first.extension().string();
+  const size_t width = first.stem().string().size();
+  std::vector<long long> numbers;
+  for (const std::string& file : files) {
+    const fs::path path(file);
+    const std::string stem = path.stem().string();
+    if (stem.empty() || stem.size() != width || stem.size() > 12 || path.extension() != extension ||
+        path.parent_path() != first.parent_path() || stem.find_first_not_of("0123456789") != std::string::npos) {
+      return files;
+    }
+    numbers.push_back(std::stoll(stem));
+  }
+  const long long lowest = *std::min_element(numbers.begin(), numbers.end());
+  const long long highest = *std::max_element(numbers.begin(), numbers.end());
+  long long end = highest + 1;
+  if (lowest == 0 && static_cast<long long>(count) > end) end = static_cast<long long>(count);
+  std::vector<std::string> filled;
+  filled.reserve(static_cast<size_t>(end - lowest));
+  for (long long n = lowest; n < end; ++n) {
+    std::string stem = std::to_string(n);
+    stem.insert(0, width > stem.size() ? width - stem.size() : 0, '0');
+    filled.push_back((first.parent_path() / (stem + extension)).string());
+  }
+  return filled;
+}
+
 cv::Size FirstDecodableImageSize(const std::vector<std::string>& files) {
   RequireFile(!files.empty(), "", "no images");
   const size_t probes = std::min(files.size(), static_cast<size_t>(kSizeProbeFrames));

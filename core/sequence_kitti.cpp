@@ -150,8 +150,11 @@ class KittiSequence : public SequenceReader {
     // Colour beside the grey pair only when it was taken from the same centres (CameraPair).
     color_ = colour_is_left || (has_colour && KittiColourMatchesGrey(calib));
     const std::string times = JoinPath(root, "times.txt");
-    if (fs::is_regular_file(times)) {
-      timestamps_ = ReadTimes(times);
+    const bool has_times = fs::is_regular_file(times);
+    if (has_times) timestamps_ = ReadTimes(times);
+    // Frame i is image i: a missing image is a lost frame at its index (warned, counted), not a shift.
+    files_ = internal::FillNumberedFrameGaps(files_, timestamps_.size());
+    if (has_times) {
       RequireFile(timestamps_.size() == files_.size(), times,
                   "has " + std::to_string(timestamps_.size()) + " timestamps for " +
                       std::to_string(files_.size()) + " images");

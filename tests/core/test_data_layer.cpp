@@ -544,6 +544,18 @@ TEST(SequenceReader, ImageFolderRunsInNumericOrderAndChecksTheCameraSize) {
   EXPECT_FALSE(NaturalLess("007.png", "7.png"));
   EXPECT_FALSE(NaturalLess("x.png", "x.png"));
   EXPECT_TRUE(NaturalLess("x", "x1"));
+  // Numbered frames: a gap keeps its index (the path it would have), times.txt's length pads the end,
+  // and lists that are not one numbering stay as they are.
+  using internal::FillNumberedFrameGaps;
+  EXPECT_EQ(FillNumberedFrameGaps({"d/000000.png", "d/000001.png", "d/000003.png"}),
+            (std::vector<std::string>{"d/000000.png", "d/000001.png", "d/000002.png", "d/000003.png"}));
+  EXPECT_EQ(FillNumberedFrameGaps({"d/000000.png", "d/000001.png"}, 4),
+            (std::vector<std::string>{"d/000000.png", "d/000001.png", "d/000002.png", "d/000003.png"}));
+  EXPECT_EQ(FillNumberedFrameGaps({"d/000100.png", "d/000102.png"}, 500),
+            (std::vector<std::string>{"d/000100.png", "d/000101.png", "d/000102.png"}));
+  const std::vector<std::string> named = {"d/a.png", "d/b.png"}, mixed = {"d/1.png", "d/10.png"};
+  EXPECT_EQ(FillNumberedFrameGaps(named), named);
+  EXPECT_EQ(FillNumberedFrameGaps(mixed), mixed);  // widths differ: not one numbering
   // Timestamps as names: the digits after a decimal point are a fraction, not a number (.25 < .3).
   EXPECT_TRUE(NaturalLess("100.25.png", "100.3.png"));
   EXPECT_FALSE(NaturalLess("100.3.png", "100.25.png"));

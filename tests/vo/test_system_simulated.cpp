@@ -240,6 +240,15 @@ TEST(SystemSimulated, DamagedFrameIsCountedAsLostAndTheRunGoesOnUnlessStrict) {
   ASSERT_TRUE(std::filesystem::exists(dir + "/ply/points.ply"));
   ASSERT_EQ(dvso::testing::RunDvso(ply_run).exit_code, 0);
   EXPECT_FALSE(std::filesystem::exists(dir + "/ply/points.ply"));
+  // A MISSING frame is lost at its own index: the frames after it keep their images, times and poses
+  // (the listing used to shift every later image one frame earlier, silently).
+  std::filesystem::remove(seq + "/image_0/000004.png");
+  const auto missing = dvso::testing::RunDvso("odometry --mode stereo --preset fast --no-progress --count 8 "
+                                              "--sequence " + seq + " --out " + dir + "/missing");
+  EXPECT_EQ(missing.exit_code, 0) << missing.out;
+  EXPECT_NE(missing.out.find("warning: frame 4 skipped"), std::string::npos) << missing.out;
+  EXPECT_NE(missing.out.find("000004.png"), std::string::npos) << missing.out;
+  EXPECT_EQ(ReadTrajectory(dir + "/missing/trajectory.txt", TrajectoryFormat::kKitti).size(), 8u);
   // A damaged FIRST frame is a lost frame too: the sequence still opens (its size comes from the next).
   std::ofstream(seq + "/image_0/000000.png") << "not a png either";
   const auto first = dvso::testing::RunDvso("odometry --mode stereo --preset fast --no-progress --count 5 --sequence " +
@@ -253,12 +262,14 @@ TEST(SystemSimulated, InterruptWritesTheFramesProcessedAndAMarker) {
   const std::string dir = dvso::testing::FreshSimulatedSequence("dvso_interrupt", 150);
   ASSERT_FALSE(dir.empty());
   const std::string seq = dir + "/seq";
-  // Start, wait until frames are being processed, send SIGINT, collect the exit status.
+  // Start, wait until frames are being processed, send SIGINT twice at once (as GNU timeout and a
+  // terminal do: the process, then its group; the copy is the same request, not a kill), collect the
+  // exit status.
   const std::string out = dir + "/out";
   const std::string script = "(" + std::string(DVSO_BINARY) + " odometry --mode mono --no-progress --sequence " + seq +
                              " --out " + out + " > " + dir + "/log.txt 2>&1 & pid=$!; " +
                              "for i in $(seq 200); do [ -f " + out + "/run_log.csv.partial ] && break; sleep 0.02; done; " +
-                             "sleep 0.3; kill -INT $pid; wait $pid; echo $? > " + dir + "/status.txt)";
+                             "sleep 0.3; kill -INT $pid; kill -INT $pid; wait $pid; echo $? > " + dir + "/status.txt)";
   ASSERT_EQ(std::system(("bash -c '" + script + "'").c_str()), 0);
   std::ifstream status_file(dir + "/status.txt");
   int status = -1;

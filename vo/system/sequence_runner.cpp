@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <csignal>
+#include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -21,16 +22,26 @@ namespace dvso::vo {
 
 namespace {
 // Set by SIGINT / SIGTERM while a run that asked for it is in progress. The first signal asks the run
-// to stop and write what it has; the handler then gives both signals their default action back, so a
-// second one during a long finish ends the process at once. What that kill leaves is not a finished
-// run: no INTERRUPTED marker, possibly temporary files (*.tmp-writing*, run_log.csv.partial) and a new
-// run log beside the old trajectory; every file in place is complete (atomic writes).
-// signal() is async-signal-safe (POSIX).
+// to stop and write what it has. Copies of it within kRepeatedSignalWindowSeconds are the same request
+// (GNU timeout, and a terminal, signal the process and then its group); a signal after that ends the
+// process at once (default action), for a long finish the user no longer wants. What that kill leaves
+// is not a finished run: no INTERRUPTED marker, possibly temporary files (*.tmp-writing*,
+// run_log.csv.partial) and a new run log beside the old trajectory; every file in place is complete
+// (atomic writes). clock_gettime, signal and raise are async-signal-safe (POSIX).
+constexpr long kRepeatedSignalWindowSeconds = 2;
 volatile std::sig_atomic_t g_interrupt_requested = 0;
-extern "C" void RequestInterrupt(int) {
-  g_interrupt_requested = 1;
-  std::signal(SIGINT, SIG_DFL);
-  std::signal(SIGTERM, SIG_DFL);
+volatile std::sig_atomic_t g_first_signal_second = 0;  // CLOCK_MONOTONIC seconds of the first signal
+extern "C" void RequestInterrupt(int signal_number) {
+  timespec now{};
+  clock_gettime(CLOCK_MONOTONIC, &now);
+  if (!g_interrupt_requested) {
+    g_first_signal_second = static_cast<std::sig_atomic_t>(now.tv_sec);
+    g_interrupt_requested = 1;
+    return;
+  }
+  if (now.tv_sec - g_first_signal_second < kRepeatedSignalWindowSeconds) return;
+  std::signal(signal_number, SIG_DFL);
+  std::raise(signal_number);
 }
 
 // Installs the handlers for the lifetime of a run and restores the old ones.
