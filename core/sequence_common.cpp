@@ -113,19 +113,20 @@ bool NaturalLess(const std::string& a, const std::string& b) {
     if (IsDigit(a[i]) && IsDigit(b[j])) {
       const NameNumber x = ReadNameNumber(a, i), y = ReadNameNumber(b, j);
       if (const int c = CompareNameNumbers(x, y); c != 0) return c < 0;
-      if (x.digits != y.digits) return x.digits < y.digits;  // 7 before 007, 1.5 before 1.50: a total order
+      if (x.digits != y.digits) return x.digits < y.digits;  // 7 before 007, 1.5 before 1.50
       i = x.end, j = y.end;
     } else {
       if (a[i] != b[j]) return a[i] < b[j];
       ++i, ++j;
     }
   }
-  return a.size() - i < b.size() - j;
+  if (a.size() - i != b.size() - j) return a.size() - i < b.size() - j;
+  return a < b;  // names equal as numbers (01 and 1.0): text order, so that the order is total
 }
 
-std::vector<std::string> FillNumberedFrameGaps(const std::vector<std::string>& files, size_t count) {
+std::string FirstMissingNumberedFrame(const std::vector<std::string>& files, size_t count) {
   namespace fs = std::filesystem;
-  if (files.empty()) return files;
+  if (files.empty()) return "";
   const fs::path first(files.front());
   const std::string extension = first.extension().string();
   const size_t width = first.stem().string().size();
@@ -135,22 +136,21 @@ std::vector<std::string> FillNumberedFrameGaps(const std::vector<std::string>& f
     const std::string stem = path.stem().string();
     if (stem.empty() || stem.size() != width || stem.size() > 12 || path.extension() != extension ||
         path.parent_path() != first.parent_path() || stem.find_first_not_of("0123456789") != std::string::npos) {
-      return files;
+      return "";
     }
     numbers.push_back(std::stoll(stem));
   }
-  const long long lowest = *std::min_element(numbers.begin(), numbers.end());
-  const long long highest = *std::max_element(numbers.begin(), numbers.end());
-  long long end = highest + 1;
-  if (lowest == 0 && static_cast<long long>(count) > end) end = static_cast<long long>(count);
-  std::vector<std::string> filled;
-  filled.reserve(static_cast<size_t>(end - lowest));
-  for (long long n = lowest; n < end; ++n) {
-    std::string stem = std::to_string(n);
-    stem.insert(0, width > stem.size() ? width - stem.size() : 0, '0');
-    filled.push_back((first.parent_path() / (stem + extension)).string());
+  std::sort(numbers.begin(), numbers.end());
+  const long long end = std::max(numbers.back() + 1, static_cast<long long>(count));
+  long long expected = 0;
+  for (const long long n : numbers) {
+    if (n != expected) break;
+    ++expected;
   }
-  return filled;
+  if (expected >= end) return "";
+  std::string stem = std::to_string(expected);
+  stem.insert(0, width > stem.size() ? width - stem.size() : 0, '0');
+  return (first.parent_path() / (stem + extension)).string();
 }
 
 cv::Size FirstDecodableImageSize(const std::vector<std::string>& files) {

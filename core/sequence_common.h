@@ -14,14 +14,15 @@ cv::Mat LoadGreyImage(const std::string& path, cv::Size expected = {});
 // Loads an image as CV_8UC3 (BGR); same checks.
 cv::Mat LoadColorImage(const std::string& path, cv::Size expected = {});
 // Image files (png, jpg, jpeg, pgm, bmp; any case) of a directory in natural order: digit runs compare
-// as numbers, so 1.png 2.png 10.png stay in that order (zero-padded KITTI names sort as before).
+// as numbers, so 1.png 2.png 10.png stay in that order (zero-padded KITTI names sort as before), and
+// digits after a decimal point as a fraction (timestamps as names: 100.25 before 100.3).
 std::vector<std::string> ListImages(const std::string& directory);
-// Frames numbered by their names (KITTI: frame i is %06d.png): when every file's stem is a number of
-// one width with one extension, the list is filled so that position k holds number first + k, a missing
-// number being the path it would have (reading it fails: a lost frame at its own index, not a shift of
-// every later frame onto another timestamp and pose); with `count` > 0 and numbering from 0, padded to
-// `count` frames (times.txt's length). Any other list is returned as it is.
-std::vector<std::string> FillNumberedFrameGaps(const std::vector<std::string>& files, size_t count = 0);
+// Frames numbered by their names (KITTI: frame i is %06d.png). When every file's stem is a number of
+// one width with one extension: the path the first missing number would have, counting from 0 (a
+// missing first frame too) up to the highest number, or to `count` - 1 when `count` (times.txt's length)
+// is larger; "" when nothing is missing or the list is not one numbering. A missing image would shift
+// every later frame onto another timestamp and pose.
+std::string FirstMissingNumberedFrame(const std::vector<std::string>& files, size_t count = 0);
 // Natural order of two file names (ListImages).
 bool NaturalLess(const std::string& a, const std::string& b);
 // The size of the first of `files` that decodes (up to kSizeProbeFrames of them): a damaged first

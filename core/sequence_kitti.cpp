@@ -4,6 +4,7 @@
 #include <map>
 #include <fstream>
 #include <iomanip>
+#include <iostream>
 #include <opencv2/imgcodecs.hpp>
 #include <sstream>
 
@@ -152,8 +153,16 @@ class KittiSequence : public SequenceReader {
     const std::string times = JoinPath(root, "times.txt");
     const bool has_times = fs::is_regular_file(times);
     if (has_times) timestamps_ = ReadTimes(times);
-    // Frame i is image i: a missing image is a lost frame at its index (warned, counted), not a shift.
-    files_ = internal::FillNumberedFrameGaps(files_, timestamps_.size());
+    // Frame i is image i: a missing image would shift every later frame onto another time and pose.
+    const std::string missing = internal::FirstMissingNumberedFrame(files_, timestamps_.size());
+    if (!missing.empty() && has_times) {
+      RequireFile(false, missing, "missing (times.txt has " + std::to_string(timestamps_.size()) +
+                                      " frames; frame i is image i): restore it, or renumber the images and times");
+    }
+    if (!missing.empty()) {
+      std::cerr << "dvso: warning: " << missing << " is missing: the frames are taken in file order, so every later "
+                << "frame is one earlier than its number (poses and times of its number do not apply)" << std::endl;
+    }
     if (has_times) {
       RequireFile(timestamps_.size() == files_.size(), times,
                   "has " + std::to_string(timestamps_.size()) + " timestamps for " +

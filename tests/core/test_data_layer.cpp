@@ -544,18 +544,17 @@ TEST(SequenceReader, ImageFolderRunsInNumericOrderAndChecksTheCameraSize) {
   EXPECT_FALSE(NaturalLess("007.png", "7.png"));
   EXPECT_FALSE(NaturalLess("x.png", "x.png"));
   EXPECT_TRUE(NaturalLess("x", "x1"));
-  // Numbered frames: a gap keeps its index (the path it would have), times.txt's length pads the end,
-  // and lists that are not one numbering stay as they are.
-  using internal::FillNumberedFrameGaps;
-  EXPECT_EQ(FillNumberedFrameGaps({"d/000000.png", "d/000001.png", "d/000003.png"}),
-            (std::vector<std::string>{"d/000000.png", "d/000001.png", "d/000002.png", "d/000003.png"}));
-  EXPECT_EQ(FillNumberedFrameGaps({"d/000000.png", "d/000001.png"}, 4),
-            (std::vector<std::string>{"d/000000.png", "d/000001.png", "d/000002.png", "d/000003.png"}));
-  EXPECT_EQ(FillNumberedFrameGaps({"d/000100.png", "d/000102.png"}, 500),
-            (std::vector<std::string>{"d/000100.png", "d/000101.png", "d/000102.png"}));
-  const std::vector<std::string> named = {"d/a.png", "d/b.png"}, mixed = {"d/1.png", "d/10.png"};
-  EXPECT_EQ(FillNumberedFrameGaps(named), named);
-  EXPECT_EQ(FillNumberedFrameGaps(mixed), mixed);  // widths differ: not one numbering
+  // Numbered frames: the first missing number from 0 (times.txt's length counts), nothing for complete
+  // lists or lists that are not one numbering.
+  using internal::FirstMissingNumberedFrame;
+  EXPECT_EQ(FirstMissingNumberedFrame({"d/000000.png", "d/000001.png", "d/000003.png"}), "d/000002.png");
+  EXPECT_EQ(FirstMissingNumberedFrame({"d/000001.png", "d/000002.png"}), "d/000000.png");
+  EXPECT_EQ(FirstMissingNumberedFrame({"d/000000.png", "d/000001.png"}, 4), "d/000002.png");
+  EXPECT_EQ(FirstMissingNumberedFrame({"d/000000.png", "d/000001.png"}, 2), "");
+  EXPECT_EQ(FirstMissingNumberedFrame({"d/000000.png", "d/000001.png"}), "");
+  EXPECT_EQ(FirstMissingNumberedFrame({"d/a.png", "d/b.png"}), "");
+  EXPECT_EQ(FirstMissingNumberedFrame({"d/1.png", "d/10.png"}), "");  // widths differ: not one numbering
+  EXPECT_EQ(FirstMissingNumberedFrame({"d/000000000000.png", "d/999999999999.png"}), "d/000000000001.png");
   // Timestamps as names: the digits after a decimal point are a fraction, not a number (.25 < .3).
   EXPECT_TRUE(NaturalLess("100.25.png", "100.3.png"));
   EXPECT_FALSE(NaturalLess("100.3.png", "100.25.png"));
@@ -564,6 +563,7 @@ TEST(SequenceReader, ImageFolderRunsInNumericOrderAndChecksTheCameraSize) {
   EXPECT_TRUE(NaturalLess("99.9.png", "100.png"));
   EXPECT_TRUE(NaturalLess("1.5.png", "1.50.png"));
   EXPECT_FALSE(NaturalLess("1.50.png", "1.5.png"));
+  EXPECT_NE(NaturalLess("01.png", "1.0.png"), NaturalLess("1.0.png", "01.png"));  // equal as numbers, still ordered
 }
 
 TEST(YamlSection, StrictKeysAndNestedSections) {

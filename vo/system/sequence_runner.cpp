@@ -22,7 +22,8 @@ namespace dvso::vo {
 
 namespace {
 // Set by SIGINT / SIGTERM while a run that asked for it is in progress. The first signal asks the run
-// to stop and write what it has. Copies of it within kRepeatedSignalWindowSeconds are the same request
+// to stop and write what it has. Copies of it within kRepeatedSignalWindowSeconds (whole seconds of the
+// monotonic clock: 1-2 s) are the same request
 // (GNU timeout, and a terminal, signal the process and then its group); a signal after that ends the
 // process at once (default action), for a long finish the user no longer wants. What that kill leaves
 // is not a finished run: no INTERRUPTED marker, possibly temporary files (*.tmp-writing*,
