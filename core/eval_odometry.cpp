@@ -179,11 +179,17 @@ Associated Associate(const Trajectory& gt, const Trajectory& est, const Odometry
     a.gt_xyz.push_back(gt.poses[i].T_world_camera.translation());
     a.est_xyz.push_back(est.poses[a.match[i]].T_world_camera.translation());
   }
-  Require(a.gt_xyz.size() >= 2,
-          "only " + std::to_string(a.gt_xyz.size()) + " estimated poses match a ground-truth pose (by " +
-              "timestamp within " + std::to_string(options.max_time_difference) +
-              " s; KITTI files without times match by frame index): check that both files describe " +
-              "the same sequence and use the same time base");
+  // Fewer than half of the estimate paired means two time bases that meet by chance (a KITTI file
+  // without --gt-times is timed by frame index 0, 1, 2, ..., a TUM file by seconds): the numbers of such
+  // a pairing describe nothing.
+  const size_t needed = std::max<size_t>(2, (std::min(gt.size(), est.size()) + 1) / 2);
+  Require(a.gt_xyz.size() >= needed,
+          "only " + std::to_string(a.gt_xyz.size()) + " of " + std::to_string(est.size()) +
+              " estimated poses match a ground-truth pose (by timestamp within " +
+              std::to_string(options.max_time_difference) +
+              " s; KITTI files without times match by frame index, TUM files by seconds: give --gt-times / "
+              "--est-times times.txt for a KITTI file beside a TUM one): check that both files describe the same "
+              "sequence and use the same time base");
   return a;
 }
 

@@ -38,6 +38,27 @@ std::string WriteSplit(const TempDir& dir, int lines) {
 // A NaN or inf in a network's .npy output made 0 was scored as a prediction at max_depth (80 m): the
 // evaluation refuses it, naming the file, the row and the pixel; the odometry's disparity sources keep
 // reading it as "no disparity" (the default of NpyDisparityStack::Frame).
+// A KITTI GT without --gt-times is timed by frame index, a TUM estimate by seconds: at 10 Hz every 10th
+// pose pairs by chance, and the run reported an ATE of that pairing. Fewer than half paired is an error
+// that names the remedy; with the GT's times the same files evaluate.
+TEST(EvalInputChecks, TwoTimeBasesThatMeetByChanceAreAnError) {
+  TempDir dir("eval_time_bases");
+  std::ofstream gt(dir / "gt.txt"), tum(dir / "est.tum"), times(dir / "times.txt");
+  for (int i = 0; i < 60; ++i) {
+    gt << "1 0 0 0 0 1 0 0 0 0 1 " << 1.0 * i << "\n";
+    tum << 0.1 * i << " 0 0 " << 1.0 * i << " 0 0 0 1\n";
+    times << 0.1 * i << "\n";
+  }
+  gt.close(), tum.close(), times.close();
+  const CliRun wrong = RunDvso("eval-odometry --gt " + dir / "gt.txt" + " --est " + dir / "est.tum");
+  EXPECT_EQ(wrong.exit_code, 1);
+  EXPECT_NE(wrong.out.find("of 60 estimated poses match"), std::string::npos) << wrong.out;
+  EXPECT_NE(wrong.out.find("--gt-times"), std::string::npos) << wrong.out;
+  const CliRun right =
+      RunDvso("eval-odometry --gt " + dir / "gt.txt" + " --gt-times " + dir / "times.txt" + " --est " + dir / "est.tum");
+  EXPECT_EQ(right.exit_code, 0) << right.out;
+}
+
 TEST(EvalInputChecks, NonFiniteNpyPredictionIsAnErrorNamingFileAndPixel) {
   TempDir dir("eval_npy_nan");
   fs::create_directories(dir / "gt");
