@@ -155,11 +155,9 @@ class KittiSequence : public SequenceReader {
     if (has_times) timestamps_ = ReadTimes(times);
     // Frame i is image i: a missing image would shift every later frame onto another time and pose.
     const std::string missing = internal::FirstMissingNumberedFrame(files_, timestamps_.size());
-    if (!missing.empty() && has_times) {
-      RequireFile(false, missing, "missing (times.txt has " + std::to_string(timestamps_.size()) +
-                                      " frames; frame i is image i): restore it, or renumber the images and times");
-    }
     if (!missing.empty()) {
+      RequireFile(!has_times, missing, "missing (times.txt has " + std::to_string(timestamps_.size()) +
+                                           " frames; frame i is image i): restore it, or renumber the images and times");
       std::cerr << "dvso: warning: " << missing << " is missing: the frames are taken in file order, so every later "
                 << "frame is one earlier than its number (poses and times of its number do not apply)" << std::endl;
     }
