@@ -186,7 +186,7 @@ void System::TrackFrame(int frame_index, const ImagePyramidPtr& pyr, const cv::M
   // from the tracker's relative transfer I_new = e^{a} I_ref + b.
   const double a_new = ref->a + result.affine_a;
   const double b_new = result.affine_b + std::exp(result.affine_a) * ref->b;
-  TraceCandidates(*pyr, T_new_cw, a_new, b_new);
+  TraceCandidates(TraceTarget{pyr.get(), T_new_cw, a_new, b_new});
   ++frames_since_keyframe_;
 
   ev->status = FrameStatus::kTracked;
@@ -224,7 +224,7 @@ System::KeyframePrediction System::FetchPrediction(int frame_index, const cv::Ma
   return KeyframePrediction{SanitizeDisparity(pair.left), SanitizeDisparity(pair.right)};
 }
 
-void System::AttachPendingPrediction(bool wait) {
+void System::AttachPendingPrediction(bool wait, const TraceTarget* late_trace) {
   if (pending_prediction_id_ < 0) return;
   const int id = pending_prediction_id_;
   if (!wait && !predictions_->IsReady(id)) return;
@@ -235,6 +235,9 @@ void System::AttachPendingPrediction(bool wait) {
   if (keyframe == nullptr) return;  // already marginalised: nothing to attach to
   window_->SetRightDisparity(id, prediction.right);
   AddCandidates(id, *keyframe->left, nullptr, &prediction, /*converged=*/false);
+  if (late_trace != nullptr && !candidates_.empty() && candidates_.back().keyframe_id == id) {
+    TraceCandidateSet(&candidates_.back(), *late_trace);
+  }
 }
 
 void System::InitializeMetric(int frame_index, const ImagePyramidPtr& left, const cv::Mat& right,

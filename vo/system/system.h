@@ -66,9 +66,20 @@ class System {
 
   ImagePyramidPtr MakePyramid(const cv::Mat& image) const;
   KeyframePrediction FetchPrediction(int frame_index, const cv::Mat& image);
+  // A tracked frame that candidates can be traced against.
+  struct TraceTarget {
+    const ImagePyramid* frame = nullptr;
+    Eigen::Isometry3d T_frame_w = Eigen::Isometry3d::Identity();
+    double a = 0, b = 0;  // absolute affine brightness parameters of the frame
+  };
   // Keyframe-async timing: when the prediction of the pending keyframe has
   // arrived (or `wait`), attaches its D^R and creates its candidates from D^L.
-  void AttachPendingPrediction(bool wait);
+  // With a `late_trace` (a frame already tracked, so its own trace pass has
+  // run) the new candidates are traced against it at once: otherwise they
+  // miss that frame and reach activation one keyframe later than the
+  // blocking schedule's, which on fast motion (nearly every frame a
+  // keyframe) leaves the window with a fraction of its points.
+  void AttachPendingPrediction(bool wait, const TraceTarget* late_trace = nullptr);
   // Starts a map at this frame with metric depth: static stereo matches of
   // the right image (Stereo DSO) or predicted depths (DVSO).
   void InitializeMetric(int frame_index, const ImagePyramidPtr& left, const cv::Mat& right,
@@ -76,7 +87,8 @@ class System {
   bool StepMonoInitialization(int frame_index, const ImagePyramidPtr& left);
   void MakeKeyframe(int frame_index, const ImagePyramidPtr& left, const cv::Mat& right,
                     const Eigen::Isometry3d& T_cw, double a, double b, FrameEvent* event);
-  void TraceCandidates(const ImagePyramid& frame, const Eigen::Isometry3d& T_frame_w, double a, double b);
+  void TraceCandidates(const TraceTarget& target);
+  void TraceCandidateSet(KeyframeCandidates* candidates, const TraceTarget& target);
   void ActivateCandidates(int new_keyframe_id, bool include_new_keyframe);
   // Selects candidate pixels of a new keyframe. With a right pyramid they are
   // stereo matched; with a prediction their search interval comes from D^L

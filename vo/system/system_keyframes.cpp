@@ -36,8 +36,10 @@ void System::MakeKeyframe(int frame_index, const ImagePyramidPtr& left, const cv
   KeyframePrediction prediction;  // stays empty while a keyframe-async prediction is pending
   if (capabilities_.has_predictions) {
     if (prediction_timing_ == PredictionTiming::kKeyframeAsync) {
-      // At most one prediction outstanding: the previous keyframe's comes first.
-      AttachPendingPrediction(/*wait=*/true);
+      // At most one prediction outstanding: the previous keyframe's comes
+      // first; its candidates are traced against this (tracked) frame.
+      const TraceTarget this_frame{left.get(), T_cw, a, b};
+      AttachPendingPrediction(/*wait=*/true, &this_frame);
       predictions_->Prefetch(frame_index, current_left_image_);
       if (predictions_->IsReady(frame_index)) {
         prediction = FetchPrediction(frame_index, current_left_image_);
@@ -69,14 +71,18 @@ void System::MakeKeyframe(int frame_index, const ImagePyramidPtr& left, const cv
   EmitWindowEvent(frame_index);
 }
 
-void System::TraceCandidates(const ImagePyramid& frame, const Eigen::Isometry3d& T_frame_w, double a, double b) {
-  for (KeyframeCandidates& c : candidates_) {
-    const Keyframe* host = window_->FindKeyframe(c.keyframe_id);
-    if (host == nullptr) continue;
-    const PixelTransfer tr = MakeTransfer(camera_.left, T_frame_w * host->world_to_camera.inverse());
-    const float ratio = static_cast<float>(std::exp(a - host->a));
-    const float offset = static_cast<float>(b - ratio * host->b);
-    for (ImmaturePoint& p : c.points) p.Trace(frame.level(0), tr.KRKi, tr.Kt, ratio, offset, options_.immature);
+void System::TraceCandidates(const TraceTarget& target) {
+  for (KeyframeCandidates& c : candidates_) TraceCandidateSet(&c, target);
+}
+
+void System::TraceCandidateSet(KeyframeCandidates* candidates, const TraceTarget& target) {
+  const Keyframe* host = window_->FindKeyframe(candidates->keyframe_id);
+  if (host == nullptr) return;
+  const PixelTransfer tr = MakeTransfer(camera_.left, target.T_frame_w * host->world_to_camera.inverse());
+  const float ratio = static_cast<float>(std::exp(target.a - host->a));
+  const float offset = static_cast<float>(target.b - ratio * host->b);
+  for (ImmaturePoint& p : candidates->points) {
+    p.Trace(target.frame->level(0), tr.KRKi, tr.Kt, ratio, offset, options_.immature);
   }
 }
 
