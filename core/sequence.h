@@ -64,6 +64,15 @@ inline int RunEndFrame(int size, int first, int count) {
   return count < 0 ? size : first + std::min(size - first, count);
 }
 
+// The warning for a count that runs past the end (the run is clamped, as RunEndFrame does), or "" when
+// the frames asked for all exist: a user who typed --count 5000 on a 4541-frame sequence is told so.
+inline std::string CountPastEndWarning(int size, int first, int count) {
+  if (count < 0 || count <= size - first) return "";
+  return "dvso: warning: --count " + std::to_string(count) + " from frame " + std::to_string(first) +
+         " goes past the end of the sequence (" + std::to_string(size) + " frames): running " +
+         std::to_string(size - first) + " frames";
+}
+
 // Which stereo pair of a KITTI layout (raw drive or odometry folder) is the sequence's left/right pair:
 // the grey cameras 00/01 (odometry and labels) or the colour cameras 02/03 (read as grey for the odometry,
 // as colour for the network). Colour images are offered beside the grey pair (has_color) only when they

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
@@ -114,6 +115,7 @@ class EurocSequence : public SequenceReader {
     const EurocCamera cam1 = ReadEurocCamera(JoinPath(mav, "cam1"));
     // Pair frames by timestamp (nearest within 2 ms; EuRoC stamps are identical).
     size_t j = 0;
+    int unpaired = 0;
     for (size_t i = 0; i < cam0.stamps_ns.size(); ++i) {
       while (j + 1 < cam1.stamps_ns.size() &&
              std::llabs(cam1.stamps_ns[j + 1] - cam0.stamps_ns[i]) <= std::llabs(cam1.stamps_ns[j] - cam0.stamps_ns[i])) {
@@ -123,9 +125,15 @@ class EurocSequence : public SequenceReader {
         left_files_.push_back(cam0.files[i]);
         right_files_.push_back(cam1.files[j]);
         timestamps_.push_back(cam0.stamps_ns[i] * 1e-9);
+      } else {
+        ++unpaired;
       }
     }
     RequireFile(!left_files_.empty(), mav, "no cam0/cam1 frames share a timestamp");
+    if (unpaired > 0) {
+      std::cerr << "dvso: warning: " << mav << ": " << unpaired
+                << " cam0 frame(s) without a cam1 frame within 2 ms skipped\n";
+    }
     // Relative pose: p_c1 = R p_c0 + T.
     const Eigen::Matrix4d T_c1_c0 = cam1.T_body_sensor.inverse() * cam0.T_body_sensor;
     cv::Mat R(3, 3, CV_64F), T(3, 1, CV_64F);

@@ -72,6 +72,12 @@ void Run(const OdometryArgs& args) {
             << s.unreadable << "), initializing " << s.initializing << ", re-initialisations " << s.resets << "\n"
             << "mean " << s.mean_ms << " ms/frame (max " << s.max_ms << " ms), wall " << s.wall_ms
             << " ms/frame incl. reading\n";
+  if (s.frames > 0 && s.initializing + s.lost == s.frames) {
+    // Every line of the trajectory is an initialiser's guess or a lost frame: say so where a script looks.
+    std::cerr << "dvso: warning: no frame was tracked (" << s.initializing << " initializing, " << s.lost
+              << " lost): the trajectory holds no estimate; mono needs the camera to translate (or use --mode "
+                 "stereo / dvso)\n";
+  }
   if (predictions.worker != nullptr) {
     std::cout << "predictions (" << options.dvso.prediction_timing << "): " << predictions.worker->prefetched_used()
               << " requested ahead, " << predictions.worker->computed_on_demand() << " computed on demand\n";

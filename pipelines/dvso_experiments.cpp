@@ -235,7 +235,13 @@ std::vector<double> ParseRange(const std::string& text, const std::string& optio
                                        " values, more than the " + std::to_string(static_cast<int>(kMaxGridValues)) +
                                        " odometry runs a grid search may take");
   const int n = static_cast<int>(count);
-  for (int i = 0; i < n; ++i) values.push_back(parts[0] + i * parts[1]);
+  // start + i * step carries binary rounding (0.3 + 5 * 0.05 = 0.5599999999999999), which JSON and
+  // the tuned model's metadata would print in full: snap to a nanometre, far below any baseline step.
+  // (Dividing the integer count of nanometres by 1e9, both exact, gives the double nearest the decimal.)
+  constexpr double kNanometresPerMetre = 1e9;
+  for (int i = 0; i < n; ++i) {
+    values.push_back(std::round((parts[0] + i * parts[1]) * kNanometresPerMetre) / kNanometresPerMetre);
+  }
   return values;
 }
 

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
 #include <sstream>
 
 #include "core/config_yaml.h"
@@ -178,6 +179,7 @@ LabelRunSummary RunLabelExtraction(const std::string& sequence_dir, const std::s
   }
   Require(options.first < sequence->size(), sequence_dir + ": first frame beyond the sequence");
   const int end = RunEndFrame(sequence->size(), options.first, options.count);
+  if (const std::string w = CountPastEndWarning(sequence->size(), options.first, options.count); !w.empty()) std::cerr << w << "\n";
   EnsureDirectory(out_dir);
   // A killed earlier run may have left a half-written map's temporary file; nothing reads it, but it
   // is no result either.

@@ -86,6 +86,22 @@ TEST(Cli, CameraFileForACalibratedLayoutAndPredictionsOutsideDvsoAreErrors) {
   EXPECT_FALSE(fs::exists(dir + "/o"));
 }
 
+// A mono run whose camera never translates never initialises: the trajectory is written (one line per
+// frame) but holds no estimate, which the run must say rather than look like a result.
+TEST(Cli, MonoRunThatNeverInitialisesSaysSo) {
+  const std::string dir = TempDir("never_initialises");
+  fs::create_directories(dir + "/images");
+  cv::Mat texture(200, 320, CV_8UC1);
+  cv::randu(texture, 0, 255);
+  for (int i = 0; i < 6; ++i) cv::imwrite(dir + "/images/" + std::to_string(100 + i) + ".png", texture);
+  std::ofstream(dir + "/camera.txt") << "Pinhole 300 300 160 100 0\n320 200\n";
+  const CliRun r = RunDvso("odometry --mode mono --no-progress --sequence " + dir + "/images --camera " + dir +
+                           "/camera.txt --out " + dir + "/o");
+  EXPECT_EQ(r.exit_code, 0) << r.out;
+  EXPECT_NE(r.out.find("warning: no frame was tracked (6 initializing"), std::string::npos) << r.out;
+  EXPECT_TRUE(fs::exists(dir + "/o/trajectory.txt"));
+}
+
 TEST(Cli, RightGroundTruthWithoutRightLabelsIsAnError) {
   const std::string dir = TempDir("right_gt");
   const CliRun r = RunDvso("labels --sequence " + dir + " --out " + dir + "/l --gt-disparity-right " + dir);

@@ -7,6 +7,7 @@
 #include <csignal>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <tuple>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -126,6 +127,30 @@ TEST(Camera, DsoCameraFileRoundTripAndRelativeIntrinsics) {
   EXPECT_DOUBLE_EQ(rel.cx, 319.5);
   WriteText(dir + "/fov.txt", "FOV 0.5 0.5 0.5 0.5 0.9\n640 480\n");
   EXPECT_THROW(ReadDsoCameraFile(dir + "/fov.txt"), Error);
+}
+
+TEST(Camera, DsoCameraFileOutputLinesThatWouldResampleAreRefused) {
+  const std::string dir = TempDir("camfile_out");
+  const std::string k = "Pinhole 718.856 718.856 607.1928 185.2157 0\n1241 376\n";
+  // Without distortion crop / full / none, the same size or the input's own intrinsics change nothing.
+  for (const std::string out : {"crop\n1241 376\n", "full\n1241 376\n", "none\n1241 376\n",
+                                "718.856 718.856 607.1928 185.2157 0\n1241 376\n", ""}) {
+    WriteText(dir + "/same.txt", k + out);
+    const PinholeCamera cam = ReadDsoCameraFile(dir + "/same.txt");
+    EXPECT_DOUBLE_EQ(cam.fx, 718.856) << out;
+    EXPECT_EQ(cam.width, 1241) << out;
+  }
+  // Another output size or other output intrinsics: DSO would resample the images; refused, naming why.
+  for (const std::string out : {"crop\n640 192\n", "none\n620 188\n", "500 500 320 96 0\n1241 376\n",
+                                "crop\n", "stretch\n1241 376\n"}) {
+    WriteText(dir + "/other.txt", k + out);
+    try {
+      ReadDsoCameraFile(dir + "/other.txt");
+      ADD_FAILURE() << "accepted: " << out;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("other.txt"), std::string::npos) << e.what();
+    }
+  }
 }
 
 TEST(Lie, ExpLogRoundTrip) {
@@ -350,6 +375,19 @@ TEST(DisparitySource, FolderSourceResizesAndScales) {
   EXPECT_THROW(source.Predict(4, cv::Mat(20, 40, CV_8U)), Error);
 }
 
+TEST(SequenceRange, CountPastTheEndIsClampedAndSaidSo) {
+  EXPECT_EQ(RunEndFrame(100, 10, 50), 60);
+  EXPECT_EQ(CountPastEndWarning(100, 10, 50), "");
+  EXPECT_EQ(CountPastEndWarning(100, 10, 90), "");  // exactly to the end
+  EXPECT_EQ(CountPastEndWarning(100, 10, -1), "");  // -1 = to the end
+  EXPECT_EQ(RunEndFrame(100, 10, 91), 100);
+  const std::string w = CountPastEndWarning(100, 10, 91);
+  EXPECT_NE(w.find("--count 91 from frame 10"), std::string::npos) << w;
+  EXPECT_NE(w.find("running 90 frames"), std::string::npos) << w;
+  EXPECT_EQ(RunEndFrame(100, 0, std::numeric_limits<int>::max()), 100);  // no overflow
+  EXPECT_NE(CountPastEndWarning(100, 0, std::numeric_limits<int>::max()), "");
+}
+
 TEST(SequenceReader, KittiLayoutStreamsFrames) {
   const std::string root = MakeKittiSequence("kitti", 3, 37, 21);  // odd sizes on purpose
   auto seq = OpenSequence(root);
@@ -476,15 +514,19 @@ TEST(SequenceReader, EurocIsRectifiedWithMetricBaseline) {
                   "camera_model: pinhole\nintrinsics: [50.0, 50.0, 32.0, 24.0]\n"
                   "distortion_model: radial-tangential\ndistortion_coefficients: [0.0, 0.0, 0.0, 0.0]\n");
     std::string csv = "#timestamp [ns],filename\n";
-    for (int i = 0; i < 2; ++i) {
+    // cam0 has a third frame that cam1 dropped: skipped in the pair, and said so.
+    for (int i = 0; i < (c == 0 ? 3 : 2); ++i) {
       const std::string name = std::to_string(1000000000LL + i * 50000000LL) + ".png";
       cv::imwrite(cam + "/data/" + name, RandomImage(w, h, i + 10 * c));
       csv += std::to_string(1000000000LL + i * 50000000LL) + "," + name + "\n";
     }
     WriteText(cam + "/data.csv", csv);
   }
+  ::testing::internal::CaptureStderr();
   auto seq = OpenSequence(root);
+  const std::string warning = ::testing::internal::GetCapturedStderr();
   EXPECT_EQ(seq->size(), 2);
+  EXPECT_NE(warning.find("1 cam0 frame(s) without a cam1 frame"), std::string::npos) << warning;
   EXPECT_NEAR(seq->camera().baseline, 0.11, 1e-6);
   EXPECT_NEAR(seq->timestamps()[1] - seq->timestamps()[0], 0.05, 1e-9);
   const StereoFrame f = seq->Read(0);
@@ -495,7 +537,7 @@ TEST(SequenceReader, EurocIsRectifiedWithMetricBaseline) {
   fs::remove_all(root + "/mav0/cam1");
   auto mono = OpenSequence(root);
   EXPECT_FALSE(mono->is_stereo());
-  EXPECT_EQ(mono->size(), 2);
+  EXPECT_EQ(mono->size(), 3);
   EXPECT_NEAR(mono->camera().left.fx, 50.0, 1e-6);  // no distortion: the intrinsics stay
   EXPECT_DOUBLE_EQ(mono->camera().baseline, 0.0);
   const StereoFrame m = mono->Read(1);

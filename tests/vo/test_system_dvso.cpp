@@ -588,6 +588,14 @@ TEST(DvsoCli, TuneBaselineRunNamesKeepCloseValuesApart) {
     EXPECT_EQ(j["runs"][v]["name"], std::string("b_v=") + names[v]);
     EXPECT_TRUE(std::filesystem::exists(dir + "/close/bv_" + names[v] + "/trajectory.txt")) << names[v];
   }
+  // Grid values are the decimals the user meant: 0.4 + 0.02 is 0.42000000000000004 in binary, which the JSON
+  // (and a tuned model's metadata) would print in full.
+  const auto binary = dvso::testing::RunDvso("tune-baseline --json --values 0.4:0.02:0.42 --out " + dir + "/binary" +
+                                                 files, /*merge_stderr=*/false);
+  ASSERT_EQ(binary.exit_code, 0) << binary.out;
+  const nlohmann::json jb = nlohmann::json::parse(binary.out);
+  ASSERT_EQ(jb["mean_error"].size(), 2u);
+  EXPECT_EQ(jb["mean_error"][1]["virtual_baseline"].dump(), "0.42");
   // Values no run name tells apart are refused before any run.
   const auto colliding = dvso::testing::RunDvso("tune-baseline --values 0.5:0.0000001:0.5000002 --out " + dir +
                                                 "/colliding" + files);

@@ -99,6 +99,7 @@ SequenceRunSummary RunOdometryOnSequence(const SequenceReader& sequence, const O
   Require(run.first < sequence.size(), "--first " + std::to_string(run.first) + " is beyond the sequence (" +
                                            std::to_string(sequence.size()) + " frames)");
   const int end = RunEndFrame(sequence.size(), run.first, run.count);
+  if (const std::string w = CountPastEndWarning(sequence.size(), run.first, run.count); !w.empty()) std::cerr << w << "\n";
   EnsureDirectory(out_dir);
   // Checked before the run: the log and point cloud are finished (renamed into place) before the
   // trajectories are written, so a trajectory path that cannot be a file would fail the run only after
