@@ -414,8 +414,14 @@ KittiRawDriveSummary WriteKittiRawDrive(const std::string& sequence_dir, const s
     // An earlier simulation's drive (CheckDrivePlan found its marker): remove its frames and timestamps
     // (a shorter or grey rerun would otherwise leave frames a reader takes for this drive's, and a run
     // stopped halfway must still look incomplete: timestamps are written last).
+    // Temporary files of a writer killed between writing and renaming (0000000001.tmp-writing.png,
+    // timestamps.tmp-writing.txt) go too: RemoveFrameFiles does not match them, and they would keep
+    // the emptied folders in place.
+    RemoveUnfinishedAtomicWrites(summary.drive_dir);
     for (const char* sensor : {"image_00", "image_01", "image_02", "image_03", "velodyne_points", "oxts"}) {
       const std::string sensor_dir = JoinPath(summary.drive_dir, sensor);
+      RemoveUnfinishedAtomicWrites(JoinPath(sensor_dir, "data"));
+      RemoveUnfinishedAtomicWrites(sensor_dir);
       RemoveFrameFiles(JoinPath(sensor_dir, "data"));
       std::error_code ignored;  // folders that hold other files stay (remove() only takes empty ones)
       fs::remove(JoinPath(sensor_dir, "timestamps.txt"), ignored);

@@ -7,6 +7,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/error.h"
+#include "core/fs_util.h"
 
 namespace dvso::internal {
 
@@ -50,7 +51,8 @@ std::vector<std::string> ListImages(const std::string& directory) {
   RequireFile(fs::is_directory(directory), directory, "image directory does not exist");
   std::vector<std::string> files;
   for (const auto& entry : fs::directory_iterator(directory)) {
-    if (!entry.is_regular_file()) continue;
+    // A writer killed between writing and renaming leaves 000123.tmp-writing.png (core/fs_util.h): never a frame.
+    if (!entry.is_regular_file() || IsUnfinishedAtomicWrite(entry.path())) continue;
     std::string ext = entry.path().extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
     if (ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".pgm" || ext == ".bmp") {

@@ -148,8 +148,11 @@ class KittiSequence : public SequenceReader {
     camera_ = ReadKittiCalibration(calib, size.width, size.height,
                                    colour_is_left ? CameraPair::kColour : CameraPair::kGrey);
     stereo_ = camera_.baseline > 0 && fs::is_directory(right_dir_);
-    // Colour beside the grey pair only when it was taken from the same centres (CameraPair).
-    color_ = colour_is_left || (has_colour && KittiColourMatchesGrey(calib));
+    // Colour beside the grey pair only when it was taken from the same centres (CameraPair), and only when
+    // image_2/ holds images: an emptied folder (left by an earlier colour run, or by hand) is no colour
+    // camera, and taking it for one fails on image_2/<first frame> in every colour reader.
+    color_ = colour_is_left ||
+             (has_colour && KittiColourMatchesGrey(calib) && !internal::ListImages(JoinPath(root, "image_2")).empty());
     const std::string times = JoinPath(root, "times.txt");
     const bool has_times = fs::is_regular_file(times);
     if (has_times) timestamps_ = ReadTimes(times);

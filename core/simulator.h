@@ -47,8 +47,10 @@ struct SimulatorOptions {
   double exposure_level = 0.85;     // overall gain of the camera model (head room for bright facades and sky)
   double height_jitter = 0.0;       // camera height bounce (m, bound of a smooth per-frame offset); GT poses include it
   // Varied look drawn from the seed: scene.appearance = RandomAppearance(seed),
-  // exposure level 0.6-1.1, camera height +-0.1 m, height jitter 0.03 m
-  // (applied by the constructor; `dvso simulate --appearance varied`).
+  // exposure level 0.6-1.1 (replacing exposure_level), camera_height + a random
+  // +-0.1 m, height jitter at least 0.03 m (applied by the constructor;
+  // `dvso simulate --appearance varied`, which therefore refuses an explicit
+  // --exposure-level, --camera-height or --height-jitter beside it).
   bool vary_appearance = false;
 
   // Throws dvso::Error naming the offending option.

@@ -7,8 +7,9 @@
 //   exposures.txt       per frame: index, gain, bias (DSO affine brightness)
 //   vignette.png        V(x) as uint16 (65535 = 1), when vignetting is on
 //   simulation.yaml     the options and world statistics of the run
-// The metadata files are written last, so an interrupted run is recognisably
-// incomplete; every file is written atomically.
+// The metadata files of an earlier run in the folder are removed first and this
+// run's are written last, so an interrupted run is recognisably incomplete; every
+// file is written atomically.
 #include <algorithm>
 #include <cctype>
 #include <chrono>
@@ -19,6 +20,9 @@
 #include <future>
 #include <iomanip>
 #include <sstream>
+#include <string>
+#include <system_error>
+#include <vector>
 #include <opencv2/imgcodecs.hpp>
 
 #include "core/disparity_io.h"
@@ -89,6 +93,18 @@ void WriteSimulationYaml(const std::string& path, const StreetSimulator& simulat
 
 namespace {
 
+// The files written after every frame, in the order written; together they make the folder a sequence
+// that readers accept (calib.txt and times.txt at least).
+const std::vector<std::string> kMetadataFiles = {"calib.txt", "times.txt", "poses.txt", "exposures.txt",
+                                                 "vignette.png", "simulation.yaml"};
+
+// Removes `path` if it exists; throws dvso::Error naming it when it cannot be removed.
+void RemoveEarlierRunFile(const std::string& path) {
+  std::error_code error;
+  std::filesystem::remove(path, error);
+  RequireFile(!error, path, "cannot remove the file of an earlier run: " + error.message());
+}
+
 // Removes the simulator's frame files (%06d.png) numbered `first_stale` and up from `dir`, if it exists;
 // other files are left alone.
 void RemoveStaleSimulatedFrames(const std::string& dir, int first_stale) {
@@ -112,6 +128,18 @@ SimulationSummary WriteSimulatedSequence(const SimulatorOptions& options, const 
   const int n = simulator.num_frames();
   const std::vector<std::string> grey_dirs = {"image_0", "image_1", "depth_0", "disp_0", "disp_1"};
   const std::vector<std::string> colour_dirs = {"image_2", "image_3"};
+  // A rerun into the folder of an earlier run (only now: the options and trajectory were accepted by the
+  // simulator above, so a typo leaves the earlier sequence whole):
+  //  - its metadata goes first: until this run writes its own at the end, the folder is recognisably
+  //    incomplete (no times.txt / calib.txt) instead of old poses and times beside a mix of new and old
+  //    frames, should the run be killed or fail on the way;
+  //  - temporary files of a killed writer (000123.tmp-writing.png) go too: no rule below matches them.
+  if (std::filesystem::is_directory(output_dir)) {
+    for (const auto& f : kMetadataFiles) RemoveEarlierRunFile(JoinPath(output_dir, f));
+    RemoveUnfinishedAtomicWrites(output_dir);
+    for (const auto& d : grey_dirs) RemoveUnfinishedAtomicWrites(JoinPath(output_dir, d));
+    for (const auto& d : colour_dirs) RemoveUnfinishedAtomicWrites(JoinPath(output_dir, d));
+  }
   for (const auto& d : grey_dirs) EnsureDirectory(JoinPath(output_dir, d));
   if (options.color) {
     for (const auto& d : colour_dirs) EnsureDirectory(JoinPath(output_dir, d));
@@ -159,6 +187,15 @@ SimulationSummary WriteSimulatedSequence(const SimulatorOptions& options, const 
   // without this, the folder would hold more images than poses and times.
   for (const auto& d : grey_dirs) RemoveStaleSimulatedFrames(JoinPath(output_dir, d), n);
   for (const auto& d : colour_dirs) RemoveStaleSimulatedFrames(JoinPath(output_dir, d), options.color ? n : 0);
+  if (!options.color) {
+    // The readers take an image_2/ folder for colour images (sequence_kitti.cpp): an emptied one of an
+    // earlier colour run would make `predict` and the raw-layout writer look for image_2/000000.png.
+    // remove() takes empty folders only: one that still holds files that are not ours stays.
+    for (const auto& d : colour_dirs) {
+      std::error_code not_empty;
+      std::filesystem::remove(JoinPath(output_dir, d), not_empty);
+    }
+  }
 
   // Metadata last.
   WriteKittiCalibration(JoinPath(output_dir, "calib.txt"), simulator.camera());
@@ -185,11 +222,9 @@ SimulationSummary WriteSimulatedSequence(const SimulatorOptions& options, const 
             static_cast<uint16_t>(std::lround(65535.0 * std::max(0.0, 1.0 - options.vignetting_strength * r2 / half_diagonal_sq)));
       }
     WritePng(JoinPath(output_dir, "vignette.png"), vignette);
-  } else {
-    // An earlier vignetted simulation's map would make a photometric calibration correct images that
-    // have no vignetting.
-    std::filesystem::remove(JoinPath(output_dir, "vignette.png"));
   }
+  // (Without vignetting there is no vignette.png: an earlier vignetted run's map, which would make a
+  // photometric calibration correct images that have none, went with the other metadata at the start.)
   summary.frames = n;
   summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   WriteSimulationYaml(JoinPath(output_dir, "simulation.yaml"), simulator, summary);

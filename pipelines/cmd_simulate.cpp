@@ -2,6 +2,8 @@
 // ground truth (core/simulator.h; docs/simulator.md).
 #include <iostream>
 #include <memory>
+#include <set>
+#include <string>
 
 #include "core/error.h"
 #include "core/fs_util.h"
@@ -14,6 +16,11 @@ namespace dvso::cli {
 
 namespace {
 
+// Options whose presence on the command line Run checks (CLI11 count()): each of them is an error where
+// another option would silently override or ignore it.
+const char* const kCheckedOptions[] = {"--exposure-level", "--height-jitter", "--camera-height", "--noise-sigma",
+                                       "--vignetting",     "--exposure-sigma", "--speed",        "--raw-drive"};
+
 struct SimulateArgs {
   std::string output_dir;
   int width = 0, height = 0;  // 0 = KITTI size
@@ -24,8 +31,7 @@ struct SimulateArgs {
   std::string raw_layout = "none";   // none | sync | extract
   std::string raw_out;               // root of the raw date folder (default OUT/kitti_raw)
   int raw_drop_every = 0;            // extract: the right cameras lose every n-th frame
-  bool exposure_level_given = false; // --exposure-level on the command line
-  bool raw_drive_given = false;      // --raw-drive on the command line
+  std::set<std::string> given;       // the options of kCheckedOptions given on the command line
   SimulatorOptions options;
   KittiRawDriveOptions raw;
 };
@@ -48,13 +54,32 @@ void Run(SimulateArgs& args) {
   o.scene.shadows = !args.no_shadows;
   o.edge_antialiasing = !args.no_edge_aa;
   o.vary_appearance = args.appearance == "varied";
-  // The varied look draws the exposure from the seed: a given level would be silently replaced.
-  Require(!(o.vary_appearance && args.exposure_level_given),
-          "--exposure-level acts with --appearance fixed only (the varied look draws it from the seed)");
+  const auto given = [&](const char* option) { return args.given.count(option) > 0; };
+  // The varied look draws the exposure and the camera height from the seed (StreetSimulator: the level is
+  // replaced, a random +-0.1 m added to the height, the jitter raised to at least 0.03 m): a given value
+  // would be silently changed.
+  for (const char* option : {"--exposure-level", "--height-jitter", "--camera-height"}) {
+    Require(!(o.vary_appearance && given(option)),
+            std::string(option) + " acts with --appearance fixed only (the varied look draws it from the seed)");
+  }
+  // A value for an effect that is switched off would be silently ignored.
+  struct ValueOfSwitchedOffEffect {
+    const char* option;
+    const char* off_flag;
+    bool off;
+  };
+  for (const ValueOfSwitchedOffEffect& v : {ValueOfSwitchedOffEffect{"--noise-sigma", "--no-noise", args.no_noise},
+                                            ValueOfSwitchedOffEffect{"--vignetting", "--no-vignetting", args.no_vignetting},
+                                            ValueOfSwitchedOffEffect{"--exposure-sigma", "--no-exposure-drift",
+                                                                     args.no_exposure}}) {
+    Require(!(v.off && given(v.option)), std::string(v.option) + " has no effect with " + v.off_flag);
+  }
+  Require(!(given("--speed") && !o.trajectory_path.empty()),
+          "--speed sets the generated path's speed: it has no effect with --trajectory");
   o.Check();
   Require(args.raw_layout == "none" || args.raw_layout == "sync" || args.raw_layout == "extract",
           "--raw-layout must be none, sync or extract");
-  Require(args.raw_layout != "none" || (args.raw_out.empty() && !args.raw_drive_given),
+  Require(args.raw_layout != "none" || (args.raw_out.empty() && !given("--raw-drive")),
           "--raw-out / --raw-drive need --raw-layout sync|extract");
   Require(args.raw_drop_every >= 0, "--raw-drop-every must be >= 0");
   Require(args.raw_drop_every == 0 || args.raw_layout == "extract", "--raw-drop-every needs --raw-layout extract");
@@ -160,8 +185,9 @@ void AddSimulateCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_flag("--quiet", args->quiet, "no progress bar");
   cmd->callback([args, cmd] {
-    args->exposure_level_given = cmd->count("--exposure-level") > 0;
-    args->raw_drive_given = cmd->count("--raw-drive") > 0;
+    for (const char* option : kCheckedOptions) {
+      if (cmd->count(option) > 0) args->given.insert(option);
+    }
     Run(*args);
   });
 }

@@ -1,7 +1,8 @@
 // `dvso predict --model model.pt (--images DIR | --sequence DIR) --out DIR
 // [--post-process] [--device auto|cpu|cuda] [--no-color] [--threads N]`: writes
 // left/NAME.png and right/NAME.png (KITTI uint16, disparity * 256, at the input
-// image resolution) plus colour-mapped previews in left_color/ and right_color/.
+// image resolution; a disparity the PNG cannot hold, >= 256 px, is written as 0 =
+// invalid) plus colour-mapped previews in left_color/ and right_color/.
 // NAME: the input's file name with --images, the sequence's frame name with --sequence.
 #include <algorithm>
 #include <atomic>
@@ -36,6 +37,8 @@ struct PredictArgs {
 
 void RunPredict(const PredictArgs& args) {
   Require(args.images.empty() != args.sequence.empty(), "give exactly one of --images DIR or --sequence DIR");
+  // A folder of images has no camera pairs to choose from: the option would be silently ignored.
+  Require(args.cameras.empty() || !args.sequence.empty(), "--cameras needs --sequence");
   stacknet::PredictorOptions options = args.options;
   // The network leaves one core to the reader and writer threads: an OpenMP
   // team as large as the machine stalls at its barriers whenever an I/O thread
@@ -79,15 +82,26 @@ void RunPredict(const PredictArgs& args) {
       const StereoFrame frame = sequence->Read(i, options);
       image = frame.left_color.empty() ? frame.left : frame.left_color;
     } else {
-      image = cv::imread(files[i], cv::IMREAD_COLOR);
+      // As the sequence readers (and `odometry --sequence` on the same files) see it: they ignore a JPEG's
+      // EXIF orientation, so a map of the rotated image would not lie on the frame the odometry tracks.
+      image = cv::imread(files[i], cv::IMREAD_COLOR | cv::IMREAD_IGNORE_ORIENTATION);
       RequireFile(!image.empty(), files[i], "cannot read image");
     }
     return image;
   };
   std::atomic<bool> removed_previews{false};  // --no-color removed a stale preview (set on the writer thread)
+  std::atomic<long long> beyond_png_range{0};   // pixels made invalid by InvalidBeyondKittiMapRange (writer thread)
+  std::atomic<long long> map_pixels{0};         // all pixels of the maps written
   auto write = [&](const DisparityPair& pair, const std::string& name) {
-    WriteKittiMapPng(JoinPath(JoinPath(args.out, "left"), name), pair.left);
-    WriteKittiMapPng(JoinPath(JoinPath(args.out, "right"), name), pair.right);
+    // The network outputs up to 0.3 * width px, more than a KITTI PNG holds (255.996 px) on wide images:
+    // WriteKittiMapPng would clamp such a disparity, i.e. write a wrong, too far depth. Invalid (0) instead,
+    // as the simulator does for its ground truth.
+    for (const cv::Mat* map : {&pair.left, &pair.right}) {
+      beyond_png_range += cv::countNonZero(*map > kKittiMapMaxValue);
+      map_pixels += static_cast<long long>(map->total());
+    }
+    WriteKittiMapPng(JoinPath(JoinPath(args.out, "left"), name), InvalidBeyondKittiMapRange(pair.left));
+    WriteKittiMapPng(JoinPath(JoinPath(args.out, "right"), name), InvalidBeyondKittiMapRange(pair.right));
     if (!args.no_color) {
       // Like the maps: a full disk is an error, and a killed run never leaves a truncated preview in place.
       for (const bool left : {true, false}) {
@@ -147,6 +161,11 @@ void RunPredict(const PredictArgs& args) {
   std::cout << "Timing: " << count / std::max(total_s, 1e-9) << " frames/s; per frame " << 1000 * forward_s / count
             << " ms network (resize, forward, resize back), waiting " << 1000 * wait_read_s / count << " ms for reading and "
             << 1000 * wait_write_s / count << " ms for writing\n";
+  if (beyond_png_range > 0) {
+    std::cerr << "dvso: warning: dropped " << beyond_png_range.load() << " of " << map_pixels.load()
+              << " predicted disparities beyond the KITTI PNG range (" << kKittiMapMaxValue
+              << " px): written as invalid (0)" << std::endl;
+  }
   std::cout << "Wrote " << count << " left/right disparity maps to " << args.out << std::endl;
 }
 

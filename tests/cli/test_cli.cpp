@@ -245,3 +245,29 @@ TEST(Cli, LabelListWithTwoSequencesOfOneNameIsAnError) {
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.out.find("distinct names"), std::string::npos) << r.out;
 }
+
+// Options that another option would silently override or ignore are errors, like --exposure-level with
+// --appearance varied: the varied look draws the camera height and its jitter from the seed, a switched-off
+// effect has no strength, and a trajectory file sets the speed.
+TEST(Cli, SimulateRejectsOptionsThatWouldBeOverriddenOrIgnored) {
+  const std::string dir = TempDir("simulate_ignored");
+  std::ofstream(dir + "/poses.txt") << "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 0 0 1 0 0 0 0 1 1\n";
+  const std::string common = "simulate --quiet --count 1 --width 96 --height 32 --texture-size 64 --out " + dir + "/o";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {" --appearance varied --height-jitter 0.02", "--height-jitter"},
+      {" --appearance varied --camera-height 1.5", "--camera-height"},
+      {" --no-noise --noise-sigma 2", "--noise-sigma"},
+      {" --no-vignetting --vignetting 0.2", "--vignetting"},
+      {" --no-exposure-drift --exposure-sigma 0.05", "--exposure-sigma"},
+      {" --trajectory " + dir + "/poses.txt --speed 5", "--speed"}};
+  for (const auto& [args, option] : cases) {
+    const CliRun r = RunDvso(common + args);
+    EXPECT_EQ(r.exit_code, 1) << args << "\n" << r.out;
+    EXPECT_NE(r.out.find("dvso: error: " + option), std::string::npos) << args << "\n" << r.out;
+    EXPECT_FALSE(fs::exists(dir + "/o")) << args << ": refused before writing";
+  }
+  // Each of them alone (or with the effect on, the look fixed, the path generated) still acts.
+  const CliRun alone = RunDvso(common + " --height-jitter 0.02 --camera-height 1.5 --noise-sigma 2 --vignetting 0.2 "
+                                        "--exposure-sigma 0.05 --speed 5");
+  EXPECT_EQ(alone.exit_code, 0) << alone.out;
+}

@@ -3,6 +3,8 @@
 // bounded Sim(3)-aligned error.
 #include <gtest/gtest.h>
 
+#include <limits>
+
 #include "core/alignment.h"
 #include "core/lie.h"
 #include "tests/vo/frontend_test_scene.h"
@@ -42,17 +44,19 @@ struct RunResult {
   std::vector<FrameStatus> statuses;
 };
 
-RunResult RunBox(OdometryMode mode, int frames, int corrupt_frame = -1) {
+RunResult RunBox(OdometryMode mode, int frames, int corrupt_frame = -1, OdometryObserver* extra = nullptr,
+                 int active_points = 1000) {
   testing::BoxScene scene;
   StereoCamera cam;
   cam.left = testing::TestCamera(320, 240);
   cam.baseline = 0.4;
   OdometryOptions options = OdometryOptions::Preset("default");
-  options.active_points = 1000;
+  options.active_points = active_points;
   options.selector.desired_points = 800;
   System system(options, cam, mode);
   TrajectoryRecorder recorder;
   system.AddObserver(&recorder);
+  if (extra != nullptr) system.AddObserver(extra);
   RunResult out;
   out.truth = MakePath(frames);
   for (int i = 0; i < frames; ++i) {
@@ -135,6 +139,32 @@ TEST(SystemBox, TrackingLossReinitialisesAndReportsEveryFrame) {
       EXPECT_LT(err, 0.5) << "final error after re-initialisation " << err;
     }
   }
+}
+
+// Active points of the run's first window and of the first window on a frame after the last reset
+// (the corrupt frame itself starts a map on noise, without points).
+class FirstWindowPoints : public OdometryObserver {
+ public:
+  void OnWindowOptimized(const WindowEvent& e) override {
+    if (e.frame_index <= reset_frame) return;
+    counts.push_back(static_cast<int>(e.points.size()));
+    reset_frame = std::numeric_limits<int>::max();  // until the next reset
+  }
+  void OnReset(int frame_index) override { reset_frame = frame_index; }
+  int reset_frame = -1;
+  std::vector<int> counts;
+};
+
+TEST(SystemBox, MapAfterALossStartsWithAsManyPointsAsTheFirst) {
+  // Few active points wanted: the activation grid grows while the first map fills; a new map after a
+  // loss must start from the initial grid again, not the grown one.
+  FirstWindowPoints first_windows;
+  const RunResult r = RunBox(OdometryMode::kStereo, 34, /*corrupt_frame=*/16, &first_windows, /*active_points=*/120);
+  ASSERT_GE(r.resets, 1);
+  ASSERT_GE(first_windows.counts.size(), 2u);
+  std::cout << "first window points: run start " << first_windows.counts[0] << ", after the reset "
+            << first_windows.counts[1] << "\n";
+  EXPECT_GT(first_windows.counts[1], 0.95 * first_windows.counts[0]);  // 0.81 with the grown grid
 }
 
 }  // namespace

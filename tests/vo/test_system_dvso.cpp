@@ -297,6 +297,27 @@ TEST(DvsoMode, LatePredictionsStillGiveTheWindowItsPoints) {
   EXPECT_GT(mean_points[1], 0.85 * mean_points[0]);
 }
 
+TEST(DvsoMode, APendingPredictionIsCollectedWhenTrackingIsLost) {
+  // A corrupt frame loses tracking while the last keyframe's prediction is still pending (this source
+  // is never ready before it is waited for). The request is still collected, so a model error in it
+  // fails the run as anywhere else: every keyframe's prediction is fetched exactly once.
+  const testing::SimulatedSequence& seq = Sequence();
+  NeverReadyOracle source;
+  OdometryOptions options;
+  options.dvso.virtual_baseline = seq.camera.baseline;
+  System system(options, seq.camera, OdometryMode::kDvso, &source);
+  TrajectoryRecorder recorder;
+  system.AddObserver(&recorder);
+  for (int i = 0; i < kFrames; ++i) {
+    cv::Mat image = seq.left[i].clone();
+    if (i == kFrames / 2) cv::randu(image, 0, 255);
+    system.ProcessFrame(i, 0.1 * i, image);
+  }
+  system.Finish();
+  ASSERT_GE(system.num_resets(), 1);
+  EXPECT_EQ(source.calls, system.num_keyframes_total());
+}
+
 TEST(DvsoMode, TrajectoryScaleFollowsThePredictionScale) {
   const testing::SimulatedSequence& seq = Sequence();
   OracleSource source;

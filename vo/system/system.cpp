@@ -51,7 +51,11 @@ System::System(const OdometryOptions& options, const StereoCamera& camera, Odome
     calibration_ = std::make_unique<PhotometricCalibration>(
         PhotometricCalibration::Load(options_.gamma_file, options_.vignette_file));
   }
-  activation_cell_ = std::sqrt(static_cast<double>(camera_.left.width) * camera_.left.height / options_.active_points);
+  activation_cell_ = InitialActivationCell();
+}
+
+double System::InitialActivationCell() const {
+  return std::sqrt(static_cast<double>(camera_.left.width) * camera_.left.height / options_.active_points);
 }
 
 System::~System() = default;
@@ -318,7 +322,16 @@ void System::ResetAfterLoss(int frame_index, const Eigen::Isometry3d& predicted)
   candidates_.clear();
   tracker_ = CoarseTracker(options_.tracker);
   mono_init_.reset();
-  pending_prediction_id_ = -1;  // its keyframe is gone
+  if (pending_prediction_id_ >= 0) {
+    // Its keyframe is gone, but the request is still collected: a failing model must fail the run here too
+    // (its error would otherwise vanish with the worker's result).
+    FetchPrediction(pending_prediction_id_, cv::Mat());
+    pending_prediction_id_ = -1;
+  }
+  // The activation grid and selector block adapted to the lost map's point count; a new map starts as the
+  // first one did (a grid grown to its 100 px cap would give the new first keyframe a few dozen points).
+  activation_cell_ = InitialActivationCell();
+  selector_block_size_ = 0;
   initialized_ = false;
   ++segment_;
   reference_id_ = -1;

@@ -109,6 +109,8 @@ class System {
   void FlushWindow();
   PointInfo MakePointInfo(const Keyframe& host, const Point& point) const;
   Eigen::Isometry3d ReferenceWorldToCamera() const;
+  // DSO's starting activation grid cell: about active_points cells over the image.
+  double InitialActivationCell() const;
 
   OdometryOptions options_;
   StereoCamera camera_;

@@ -1,0 +1,82 @@
+// `dvso predict --images DIR`: inputs as the sequence readers see them, and options that would be ignored.
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <string>
+#include <vector>
+
+#include "core/disparity_io.h"
+#include "tests/dvso_cli_runner.h"
+#include "tests/temp_dir.h"
+
+namespace dvso {
+namespace {
+namespace fs = std::filesystem;
+
+// A folder of images has no camera pairs: --cameras is refused before the model is even loaded.
+TEST(PredictInputs, CamerasWithImagesIsAnError) {
+  const testing::TempDir dir("predict_cameras");
+  fs::create_directories(dir.path / "images");
+  ASSERT_TRUE(cv::imwrite(dir / "images/a.png", cv::Mat(32, 64, CV_8UC3, cv::Scalar(1, 2, 3))));
+  std::ofstream(dir / "model.pt") << "not read";
+  const testing::CliRun run = testing::RunDvso("predict --model " + (dir / "model.pt") + " --images " +
+                                               (dir / "images") + " --cameras grey --out " + (dir / "out"));
+  EXPECT_EQ(run.exit_code, 1) << run.out;
+  EXPECT_NE(run.out.find("--cameras needs --sequence"), std::string::npos) << run.out;
+  EXPECT_FALSE(fs::exists(dir.path / "out"));
+}
+
+// `jpeg` with an APP1 Exif segment after SOI that says "rotate 90 degrees clockwise to display" (orientation 6).
+std::vector<uint8_t> WithExifOrientation6(const std::vector<uint8_t>& jpeg) {
+  const std::vector<uint8_t> app1 = {
+      0xFF, 0xE1, 0x00, 0x22,                          // APP1, 34 bytes from here on (the length field too)
+      'E',  'x',  'i',  'f',  0x00, 0x00,              // Exif header
+      'I',  'I',  0x2A, 0x00, 0x08, 0x00, 0x00, 0x00,  // TIFF, little endian, first IFD at 8
+      0x01, 0x00,                                      // one entry
+      0x12, 0x01, 0x03, 0x00, 0x01, 0x00, 0x00, 0x00,  // tag 0x0112 Orientation, SHORT, count 1
+      0x06, 0x00, 0x00, 0x00,                          // value 6
+      0x00, 0x00, 0x00, 0x00};                         // no next IFD
+  std::vector<uint8_t> out(jpeg.begin(), jpeg.begin() + 2);  // SOI
+  out.insert(out.end(), app1.begin(), app1.end());
+  out.insert(out.end(), jpeg.begin() + 2, jpeg.end());
+  return out;
+}
+
+// The sequence readers (and so `odometry --sequence` on the same files) ignore a JPEG's EXIF orientation;
+// predict must too, or its map is of the rotated image and does not lie on the frame the odometry tracks.
+TEST(PredictInputs, JpegExifOrientationIsIgnoredLikeTheSequenceReadersDo) {
+  const testing::TempDir dir("predict_exif");
+  fs::create_directories(dir.path / "images");
+  const std::string model = dir / "tiny.pt";
+  const testing::CliRun exported = testing::RunDvso("export --config " + std::string(DVSO_TEST_DATA_DIR) +
+                                                    "/../configs/stacknet_tiny.yaml --random-init --model simple --out " +
+                                                    model);
+  ASSERT_EQ(exported.exit_code, 0) << exported.out;
+  cv::Mat image(32, 80, CV_8UC3);
+  cv::randu(image, 0, 255);
+  std::vector<uint8_t> jpeg;
+  ASSERT_TRUE(cv::imencode(".jpg", image, jpeg));
+  const std::string path = dir / "images/photo.jpg";
+  {
+    const std::vector<uint8_t> bytes = WithExifOrientation6(jpeg);
+    std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(bytes.data()),
+                                                static_cast<std::streamsize>(bytes.size()));
+  }
+  // The fixture: OpenCV's default reading turns it, the readers' does not.
+  ASSERT_EQ(cv::imread(path, cv::IMREAD_COLOR).size(), cv::Size(32, 80)) << "the Exif orientation is not applied";
+  ASSERT_EQ(cv::imread(path, cv::IMREAD_UNCHANGED).size(), cv::Size(80, 32));
+
+  const testing::CliRun run = testing::RunDvso("predict --model " + model + " --images " + (dir / "images") +
+                                               " --no-color --threads 1 --device cpu --out " + (dir / "out"));
+  ASSERT_EQ(run.exit_code, 0) << run.out;
+  const cv::Mat map = ReadKittiMapPng(dir / "out/left/photo.png");
+  EXPECT_EQ(map.cols, 80);
+  EXPECT_EQ(map.rows, 32);
+}
+
+}  // namespace
+}  // namespace dvso
