@@ -81,6 +81,8 @@ inline std::string CountPastEndWarning(int size, int first, int count) {
 enum class CameraPair { kGrey, kColour };
 // "grey" | "colour" (also "gray", "color"); throws dvso::Error otherwise.
 CameraPair ParseCameraPair(const std::string& name);
+// "grey" | "colour": the name outputs record (labels_summary.json, prediction_info.json).
+std::string CameraPairName(CameraPair pair);
 
 // Opens a sequence, detecting the layout: KITTI (calib.txt), EuRoC (mav0/ or
 // cam0/data.csv), or a monocular folder (needs camera_file). `pair` chooses the

@@ -331,4 +331,6 @@ CameraPair ParseCameraPair(const std::string& name) {
   throw Error("--cameras must be grey or colour, not '" + name + "'");
 }
 
+std::string CameraPairName(CameraPair pair) { return pair == CameraPair::kColour ? "colour" : "grey"; }
+
 }  // namespace dvso

@@ -1,6 +1,8 @@
 #include "pipelines/prediction_source.h"
 
 #include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <vector>
 
@@ -57,6 +59,25 @@ std::string ShippedModelPath() {
   return std::filesystem::is_regular_file(path) ? path : "";
 }
 
+void RequireMapsOfCameraPair(const std::string& maps_dir, const std::string& cameras) {
+  if (maps_dir.empty() || cameras.empty()) return;
+  const std::string record = (std::filesystem::path(maps_dir).parent_path() / kPredictionInfoFile).string();
+  if (!std::filesystem::is_regular_file(record)) return;
+  nlohmann::json j;
+  try {
+    std::ifstream in(record);
+    in >> j;
+  } catch (const std::exception& e) {
+    throw Error(record, std::string("cannot parse: ") + e.what());
+  }
+  if (!j.contains("cameras") || !j["cameras"].is_string()) return;
+  const std::string want = CameraPairName(ParseCameraPair(cameras));
+  const std::string made = j["cameras"].get<std::string>();
+  RequireFile(made == want, record,
+              "the maps were predicted on the " + made + " pair, this run reads the " + want + " pair: pass --cameras " +
+                  made + " (or predict with --cameras " + want + ")");
+}
+
 PredictionSource OpenPredictionSource(const PredictionSourceArgs& args, const SequenceReader& sequence) {
   args.Check();
   PredictionSource out;
@@ -66,6 +87,8 @@ PredictionSource OpenPredictionSource(const PredictionSourceArgs& args, const Se
     std::vector<std::string> names;
     names.reserve(sequence.size());
     for (int i = 0; i < sequence.size(); ++i) names.push_back(sequence.FrameName(i));
+    RequireMapsOfCameraPair(args.disparity_left, args.cameras);
+    RequireMapsOfCameraPair(args.disparity_right, args.cameras);
     out.source = std::make_unique<FileDisparitySource>(args.disparity_left, args.disparity_right, std::move(names));
     // Precomputed disparities are taken to be in this camera's stereo geometry.
     out.virtual_baseline = args.virtual_baseline > 0 ? args.virtual_baseline : sequence.camera().baseline;

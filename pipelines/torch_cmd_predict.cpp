@@ -10,6 +10,7 @@
 #include <future>
 #include <filesystem>
 #include <iostream>
+#include <nlohmann/json.hpp>
 #include <set>
 #include <thread>
 #include <opencv2/core/utility.hpp>
@@ -23,6 +24,7 @@
 #include "core/sequence.h"
 #include "core/sequence_common.h"
 #include "pipelines/commands.h"
+#include "pipelines/prediction_source.h"
 #include "stacknet/predictor.h"
 
 namespace dvso::cli {
@@ -49,6 +51,7 @@ void RunPredict(const PredictArgs& args) {
   std::cout << "Model " << args.model << " (network input " << predictor.input_width() << "x"
             << predictor.input_height() << ")" << (args.options.post_process ? ", post-processing on" : "") << "\n";
   std::unique_ptr<SequenceReader> sequence;
+  std::string cameras;  // the pair the maps belong to (--sequence only), recorded for `odometry` to check
   std::vector<std::string> files;
   if (!args.sequence.empty()) {
     // By default the network sees the colour pair of a KITTI raw drive (it was trained on it) and the pair
@@ -57,6 +60,7 @@ void RunPredict(const PredictArgs& args) {
                             : IsKittiRawDrive(args.sequence) ? CameraPair::kColour
                                                              : CameraPair::kGrey;
     sequence = OpenSequence(args.sequence, "", pair);
+    cameras = CameraPairName(pair);
   } else {
     // The sequence readers' own listing, so that `odometry --sequence` over the same images (e.g. a KITTI
     // image_0/) finds a map for every frame it reads: a rule of predict's own skipped some of them.
@@ -165,6 +169,16 @@ void RunPredict(const PredictArgs& args) {
     std::cerr << "dvso: warning: dropped " << beyond_png_range.load() << " of " << map_pixels.load()
               << " predicted disparities beyond the KITTI PNG range (" << kKittiMapMaxValue
               << " px): written as invalid (0)" << std::endl;
+  }
+  // Which pair the maps were predicted on: `odometry --disparity-left` checks it against the pair it reads
+  // (a raw drive's colour maps on its grey images sit ~6 cm off). Images without a pair record nothing.
+  const std::string info = JoinPath(args.out, kPredictionInfoFile);
+  if (cameras.empty()) {
+    fs::remove(info);
+  } else {
+    WriteStreamAtomically(info, [&](std::ostream& out) {
+      out << nlohmann::json{{"sequence", args.sequence}, {"cameras", cameras}, {"model", args.model}}.dump(2) << "\n";
+    });
   }
   std::cout << "Wrote " << count << " left/right disparity maps to " << args.out << std::endl;
 }

@@ -120,6 +120,7 @@ std::string LabelRunOptionsToYaml(const LabelRunOptions& options) {
 nlohmann::json LabelRunSummary::ToJson() const {
   nlohmann::json j = statistics.ToJson();
   j["sequence"] = sequence;
+  j["cameras"] = cameras;
   j["skipped_complete"] = skipped_complete;
   if (right_labels) {
     j["right"] = right_statistics.ToJson();
@@ -146,9 +147,16 @@ nlohmann::json LabelRunSummary::ToJson() const {
 
 namespace {
 
-cv::Mat GroundTruth(const std::string& dir, int frame_index) {
+// The ground-truth map of a frame, which must be a map of the sequence's images (GT of another
+// resolution is an error naming the file, not a size mismatch deep in the statistics).
+cv::Mat GroundTruth(const std::string& dir, int frame_index, int width, int height) {
   if (dir.empty()) return cv::Mat();
-  return ReadKittiMapPng(JoinPath(dir, FrameFileName(frame_index, ".png")));
+  const std::string path = JoinPath(dir, FrameFileName(frame_index, ".png"));
+  cv::Mat gt = ReadKittiMapPng(path);
+  RequireFile(gt.cols == width && gt.rows == height, path,
+              "ground-truth disparity is " + std::to_string(gt.cols) + "x" + std::to_string(gt.rows) +
+                  ", the sequence's images are " + std::to_string(width) + "x" + std::to_string(height));
+  return gt;
 }
 
 // A label file already in the output folder, read back for the summary: it must be a map of the
@@ -188,6 +196,7 @@ LabelRunSummary RunLabelExtraction(const std::string& sequence_dir, const std::s
 
   LabelRunSummary summary;
   summary.sequence = sequence_dir;
+  summary.cameras = CameraPairName(options.cameras);
   summary.right_labels = options.labels.right_labels;
   // Label files already there (none count with overwrite): all of them = resume without running; some
   // = a partial resume, where LabelProducer keeps them (it writes only missing ones).
@@ -199,16 +208,20 @@ LabelRunSummary RunLabelExtraction(const std::string& sequence_dir, const std::s
     complete = complete && kept[i - options.first] && (!options.labels.right_labels || kept_right[i - options.first]);
   }
   const int width = sequence->camera().left.width, height = sequence->camera().left.height;
+  // The first frame's ground truth is read now: a GT folder of another resolution (or without the
+  // sequence's frame names) fails before the odometry runs, not at the first labelled frame minutes in.
+  GroundTruth(options.gt_disparity_dir, options.first, width, height);
+  GroundTruth(options.gt_disparity_right_dir, options.first, width, height);
   if (complete) {
     // Resume: every label file is there (written atomically, so complete); only re-read for the summary.
     summary.skipped_complete = true;
     for (int i = options.first; i < end; ++i) {
       summary.statistics.AddFrame(ReadExistingLabels(LabelProducer::LabelPath(out_dir, i), width, height),
-                                  GroundTruth(options.gt_disparity_dir, i));
+                                  GroundTruth(options.gt_disparity_dir, i, width, height));
       if (options.labels.right_labels) {
         summary.right_statistics.AddFrame(
             ReadExistingLabels(LabelProducer::LabelPath(out_dir, i, true), width, height),
-            GroundTruth(options.gt_disparity_right_dir, i));
+            GroundTruth(options.gt_disparity_right_dir, i, width, height));
       }
     }
   } else {
@@ -232,7 +245,7 @@ LabelRunSummary RunLabelExtraction(const std::string& sequence_dir, const std::s
         [&](int frame_index, const cv::Mat& labels) {
           const auto start = std::chrono::steady_clock::now();
           summary.statistics.AddFrame(as_on_disk(frame_index, labels, false),
-                                      GroundTruth(options.gt_disparity_dir, frame_index));
+                                      GroundTruth(options.gt_disparity_dir, frame_index, width, height));
           evaluation_ms += MsSince(start);
         },
         [&](int frame_index, cv::Mat* left, cv::Mat* right) { reader.Take(frame_index, left, right); },
@@ -240,7 +253,7 @@ LabelRunSummary RunLabelExtraction(const std::string& sequence_dir, const std::s
         [&](int frame_index, const cv::Mat& labels) {
           const auto start = std::chrono::steady_clock::now();
           summary.right_statistics.AddFrame(as_on_disk(frame_index, labels, true),
-                                            GroundTruth(options.gt_disparity_right_dir, frame_index));
+                                            GroundTruth(options.gt_disparity_right_dir, frame_index, width, height));
           evaluation_ms += MsSince(start);
         });
     vo::SequenceRunOptions run;

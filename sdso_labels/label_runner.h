@@ -41,6 +41,9 @@ std::string LabelRunOptionsToYaml(const LabelRunOptions& options);
 
 struct LabelRunSummary {
   std::string sequence;
+  // The stereo pair labelled ("grey" 00/01 or "colour" 02/03): training refuses labels of another pair
+  // than the one it reads (stacknet/dataset.cpp).
+  std::string cameras;
   bool skipped_complete = false;  // all label files existed: odometry not run (resume)
   // Partial resume: left label files that existed before the run and were kept (not rewritten
   // without labels.overwrite). The statistics describe the files on disk, so these frames are read

@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <fstream>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
@@ -82,10 +84,34 @@ cv::Mat SampleSparse(const cv::Mat& dense, double fraction, uint64_t seed) {
   return out;
 }
 
-std::unique_ptr<SequenceReader> OpenTrainingSequence(const std::string& root) {
+CameraPair TrainingCameraPair(const std::string& root) {
   // The network learns from the colour pair of a raw drive (paper 5.1: KITTI raw, cameras 02/03).
-  const CameraPair pair = IsKittiRawDrive(root) ? CameraPair::kColour : CameraPair::kGrey;
-  return OpenSequence(root, "", pair);
+  return IsKittiRawDrive(root) ? CameraPair::kColour : CameraPair::kGrey;
+}
+
+std::unique_ptr<SequenceReader> OpenTrainingSequence(const std::string& root) {
+  return OpenSequence(root, "", TrainingCameraPair(root));
+}
+
+void RequireLabelsOfTrainingPair(const std::string& label_dir, CameraPair training_pair) {
+  if (label_dir.empty()) return;
+  const fs::path dir(label_dir);
+  for (const fs::path& summary : {dir / "labels_summary.json", dir.parent_path() / "labels_summary.json"}) {
+    if (!fs::is_regular_file(summary)) continue;
+    std::ifstream in(summary);
+    nlohmann::json j;
+    try {
+      in >> j;
+    } catch (const std::exception& e) {
+      throw Error(summary.string(), std::string("cannot parse: ") + e.what());
+    }
+    if (!j.contains("cameras")) return;  // written before labels named their pair
+    const std::string want = CameraPairName(training_pair);
+    RequireFile(j["cameras"].is_string() && j["cameras"].get<std::string>() == want, summary.string(),
+                "these labels were made on the " + j["cameras"].dump() + " pair, training reads the " + want +
+                    " pair of this sequence: run `dvso labels --cameras " + want + "`");
+    return;
+  }
 }
 
 namespace {
@@ -160,6 +186,9 @@ int StereoDataset::AddSequence(const std::string& root) {
   };
   seq.left_labels = dir_if_exists(options_.label_dir_left);
   seq.right_labels = dir_if_exists(options_.label_dir_right);
+  for (const std::string& labels : {seq.left_labels, seq.right_labels}) {
+    RequireLabelsOfTrainingPair(labels, TrainingCameraPair(root));
+  }
   if (seq.left_labels.empty() && seq.right_labels.empty()) {
     // Until Stereo DSO labels exist for this sequence: sparse samples of the simulator's GT.
     seq.left_labels = dir_if_exists(options_.gt_disparity_left);

@@ -36,7 +36,14 @@ cv::Mat SampleSparse(const cv::Mat& dense, double fraction, uint64_t seed);
 // the colour pair 02/03 of a KITTI raw drive (paper 5.1), the grey pair
 // otherwise. Training and the export's training camera (baseline, f_x) both
 // open sequences here, so the model's metadata names the pair it saw.
+CameraPair TrainingCameraPair(const std::string& root);
 std::unique_ptr<SequenceReader> OpenTrainingSequence(const std::string& root);
+
+// Labels written by `dvso labels` name the stereo pair they were made on (labels_summary.json beside the
+// left labels, or one folder up for right/); labels of another pair than `training_pair` supervise the
+// wrong pixels (KITTI's colour cameras sit ~6 cm from the grey ones, and extract drives drop other frames):
+// throws dvso::Error naming the summary. Folders without a summary (hand-made labels) are not checked.
+void RequireLabelsOfTrainingPair(const std::string& label_dir, CameraPair training_pair);
 
 // The sequence folders a dataset trains on, in order of first use, as StereoDataset
 // opens them: `sequences`, or the drives of `split_file` (read here; errors name it)

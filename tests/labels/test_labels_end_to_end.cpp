@@ -5,6 +5,8 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iterator>
+#include <string>
 
 #include "core/disparity_io.h"
 #include "core/error.h"
@@ -67,6 +69,12 @@ TEST(LabelsEndToEnd, EveryFrameLabelledAndAccurateThenResumes) {
   EXPECT_GT(first.right_statistics.share_within_1px(), 0.95);
   EXPECT_TRUE(fs::exists(JoinPath(out, "right/000039.png")));
   EXPECT_TRUE(fs::exists(out + "/labels_summary.json"));
+  {
+    // The pair the labels were made on, which training checks against the pair it reads.
+    std::ifstream summary(out + "/labels_summary.json");
+    const std::string text((std::istreambuf_iterator<char>(summary)), std::istreambuf_iterator<char>());
+    EXPECT_NE(text.find("\"cameras\": \"grey\""), std::string::npos) << text;
+  }
   EXPECT_TRUE(fs::exists(out + "/odometry/trajectory.txt"));
 
   // Resume: all files exist, nothing is recomputed, the summary is the same; the temporary files a
@@ -126,6 +134,22 @@ TEST(LabelsEndToEnd, BatchListAndErrors) {
   options.progress = false;
   options.gt_disparity_dir = seq + "/no_such_dir";
   EXPECT_THROW(labels::RunLabelExtraction(seq, seq + "_bad", options), Error);
+  // Ground truth of another resolution: an error naming the file, before any odometry (no label written).
+  const std::string small_gt = seq + "_small_gt";
+  fs::create_directories(small_gt);
+  for (int i = 0; i < kFrames; ++i) {
+    WriteKittiMapPng(JoinPath(small_gt, FrameFileName(i, ".png")), cv::Mat(64, 208, CV_32FC1, cv::Scalar(10.0f)));
+  }
+  options.gt_disparity_dir = small_gt;
+  try {
+    labels::RunLabelExtraction(seq, seq + "_small", options);
+    ADD_FAILURE() << "ground truth of another size accepted";
+  } catch (const Error& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find(JoinPath(small_gt, "000000.png")), std::string::npos) << what;
+    EXPECT_NE(what.find("208x64"), std::string::npos) << what;
+  }
+  EXPECT_FALSE(fs::exists(seq + "_small/000000.png"));
 }
 
 TEST(LabelsEndToEnd, ConfigIsStrict) {

@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <string>
@@ -76,6 +77,41 @@ TEST(PredictInputs, JpegExifOrientationIsIgnoredLikeTheSequenceReadersDo) {
   const cv::Mat map = ReadKittiMapPng(dir / "out/left/photo.png");
   EXPECT_EQ(map.cols, 80);
   EXPECT_EQ(map.rows, 32);
+}
+
+// predict records the pair its maps belong to; odometry reading them for another pair is an error naming
+// the record (a raw drive's colour maps on its grey images would sit ~6 cm off on KITTI).
+TEST(PredictInputs, OdometryRefusesMapsOfAnotherCameraPair) {
+  const testing::TempDir dir("predict_pair");
+  const testing::CliRun sim = testing::RunDvso("simulate --quiet --out " + (dir / "seq") +
+                                               " --count 6 --width 128 --height 64 --color --raw-layout sync");
+  ASSERT_EQ(sim.exit_code, 0) << sim.out;
+  std::string drive;
+  for (const auto& e : fs::recursive_directory_iterator(dir.path / "seq/kitti_raw")) {
+    if (e.is_directory() && e.path().filename().string().find("_sync") != std::string::npos) drive = e.path().string();
+  }
+  ASSERT_FALSE(drive.empty());
+  const std::string model = dir / "tiny.pt";
+  ASSERT_EQ(testing::RunDvso("export --config " + std::string(DVSO_TEST_DATA_DIR) +
+                             "/../configs/stacknet_tiny.yaml --random-init --model simple --out " + model)
+                .exit_code,
+            0);
+  const testing::CliRun predicted =
+      testing::RunDvso("predict --model " + model + " --sequence " + drive + " --no-color --out " + (dir / "maps"));
+  ASSERT_EQ(predicted.exit_code, 0) << predicted.out;
+  std::ifstream info(dir / "maps/prediction_info.json");
+  const std::string text((std::istreambuf_iterator<char>(info)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("\"cameras\": \"colour\""), std::string::npos) << text;  // the network's pair on a raw drive
+  const std::string files = " --disparity-left " + (dir / "maps/left") + " --disparity-right " + (dir / "maps/right");
+  const testing::CliRun grey = testing::RunDvso("odometry --mode dvso --no-progress --sequence " + drive + files +
+                                                " --out " + (dir / "grey"));
+  EXPECT_EQ(grey.exit_code, 1) << grey.out;
+  EXPECT_NE(grey.out.find("prediction_info.json"), std::string::npos) << grey.out;
+  EXPECT_NE(grey.out.find("--cameras colour"), std::string::npos) << grey.out;
+  EXPECT_FALSE(fs::exists(dir.path / "grey"));
+  const testing::CliRun colour = testing::RunDvso("odometry --mode dvso --no-progress --cameras colour --sequence " +
+                                                  drive + files + " --out " + (dir / "colour"));
+  EXPECT_EQ(colour.exit_code, 0) << colour.out;
 }
 
 }  // namespace

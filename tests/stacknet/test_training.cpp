@@ -407,6 +407,41 @@ TEST_F(SimulatedTraining, DatasetReadsPairsAndSparseGtLabels) {
   EXPECT_LT(values.max().item<double>(), 0.5);
 }
 
+TEST(Data, LabelsOfAnotherCameraPairAreRefused) {
+  const std::string dir = TempDir("label_pair");
+  fs::create_directories(dir + "/labels/right");
+  // Hand-made labels (no summary) and summaries from before labels named their pair are not checked.
+  EXPECT_NO_THROW(RequireLabelsOfTrainingPair(dir + "/labels", CameraPair::kColour));
+  std::ofstream(dir + "/labels/labels_summary.json") << "{\"sequence\": \"s\"}";
+  EXPECT_NO_THROW(RequireLabelsOfTrainingPair(dir + "/labels", CameraPair::kColour));
+  std::ofstream(dir + "/labels/labels_summary.json") << "{\"sequence\": \"s\", \"cameras\": \"grey\"}";
+  EXPECT_NO_THROW(RequireLabelsOfTrainingPair(dir + "/labels", CameraPair::kGrey));
+  EXPECT_NO_THROW(RequireLabelsOfTrainingPair(dir + "/labels/right", CameraPair::kGrey));  // summary one up
+  for (const std::string labels : {dir + "/labels", dir + "/labels/right"}) {
+    try {
+      RequireLabelsOfTrainingPair(labels, CameraPair::kColour);  // a raw drive: training reads 02/03
+      ADD_FAILURE() << "grey labels accepted for colour training: " << labels;
+    } catch (const Error& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find("labels_summary.json"), std::string::npos) << what;
+      EXPECT_NE(what.find("dvso labels --cameras colour"), std::string::npos) << what;
+    }
+  }
+  EXPECT_EQ(TrainingCameraPair(dir), CameraPair::kGrey);  // not a raw drive
+}
+
+TEST_F(SimulatedTraining, DatasetRefusesLabelsOfAnotherPair) {
+  // The sequence is in the odometry layout: training reads its grey pair, so colour labels are refused.
+  const std::string labels = TempDir("pair_labels") + "/labels";
+  fs::create_directories(labels);
+  std::ofstream(labels + "/labels_summary.json") << "{\"cameras\": \"colour\"}";
+  StackNetConfig config = TinyConfig(TempDir("pair_data"));
+  config.data.label_dir_left = labels;
+  EXPECT_THROW(StereoDataset(config.data, 64, 32), Error);
+  std::ofstream(labels + "/labels_summary.json") << "{\"cameras\": \"grey\"}";
+  EXPECT_NO_THROW(StereoDataset(config.data, 64, 32));
+}
+
 TEST_F(SimulatedTraining, FewCpuStepsThroughAllStagesWriteCheckpointsAndLogs) {
   const std::string out = TempDir("train");
   Trainer trainer(TinyConfig(out));

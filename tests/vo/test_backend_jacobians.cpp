@@ -247,6 +247,28 @@ TEST(BackendJacobians, VirtualStereoIgnoresAnInvalidRowItsSampleGivesNoWeight) {
   EXPECT_NE(ev.state, ResidualState::kActive);
 }
 
+TEST(BackendJacobians, CouplingWeightsScaleTheEnergyButNotTheOutlierTest) {
+  Fixture f = MakeFixture(Ramp, true, true);
+  const Point& p = f.window->keyframe(0).points[0];
+  const double idepth = 1.1 * p.idepth;  // off the true depth: the residuals are not zero
+  const WindowOptions original = f.options;
+  for (const ResidualKind kind : {ResidualKind::kStaticStereo, ResidualKind::kVirtualStereo}) {
+    ResidualEvaluation unit;
+    EvaluateResidual(GeometryFor(f, kind), p, idepth, f.options, false, &unit);
+    ASSERT_EQ(unit.state, ResidualState::kActive);
+    ASSERT_GT(unit.energy, 0.0f);
+    // A threshold at twice this residual's energy per pattern pixel: it is an inlier at weight 1 ...
+    f.options.outlier_energy_threshold = 2.0 * unit.energy / kPatternSize;
+    // ... and stays one at weight 4 (mu or lambda), where its energy counts 4 times.
+    f.options.static_stereo_weight = f.options.virtual_stereo_weight = 4.0;
+    ResidualEvaluation heavy;
+    EvaluateResidual(GeometryFor(f, kind), p, idepth, f.options, false, &heavy);
+    EXPECT_NEAR(heavy.energy, 4.0f * unit.energy, 1e-3f * unit.energy) << static_cast<int>(kind);
+    EXPECT_EQ(heavy.state, ResidualState::kActive) << static_cast<int>(kind);
+    f.options = original;
+  }
+}
+
 TEST(BackendJacobians, VirtualStereoJacobianMatchesFiniteDifferences) {
   for (const auto& fn : {std::function<float(double, double)>(Ramp), std::function<float(double, double)>(Waves)}) {
     Fixture f = MakeFixture(fn, false, true);

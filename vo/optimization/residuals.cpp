@@ -40,6 +40,15 @@ bool SampleDisparity(const cv::Mat& map, float x, float y, float* value, float* 
   return true;
 }
 
+// A residual is an outlier when its energy per pattern pixel exceeds the threshold (DSO). The test is on
+// the energy before the term's coupling weight (mu, lambda): the weights say how much a term counts, not
+// how badly a point may match (with the weight inside, lambda = 2 halved the tolerance and a lambda sweep
+// measured the gating as well as the coupling).
+ResidualState OutlierTest(float weighted_energy, const ResidualGeometry& g, const WindowOptions& options) {
+  const float energy = g.term_weight > 0 ? weighted_energy / g.term_weight : weighted_energy;
+  return energy > kPatternSize * options.outlier_energy_threshold ? ResidualState::kOutlier : ResidualState::kActive;
+}
+
 void EvaluateVirtualStereo(const ResidualGeometry& g, const Point& point, double idepth,
                            const WindowOptions& options, bool with_jacobians, ResidualEvaluation* out) {
   const float gamma = static_cast<float>(options.huber_threshold);
@@ -80,8 +89,7 @@ void EvaluateVirtualStereo(const ResidualGeometry& g, const Point& point, double
     }
   }
   out->energy = energy;
-  out->state = energy > kPatternSize * options.outlier_energy_threshold ? ResidualState::kOutlier
-                                                                        : ResidualState::kActive;
+  out->state = OutlierTest(energy, g, options);
 }
 
 }  // namespace
@@ -241,8 +249,7 @@ void EvaluateResidual(const ResidualGeometry& g, const Point& point, double idep
     out->J_pair(k, 9) = -1.0f;                        // d/db_j
   }
   out->energy = energy;
-  out->state = energy > kPatternSize * options.outlier_energy_threshold ? ResidualState::kOutlier
-                                                                        : ResidualState::kActive;
+  out->state = OutlierTest(energy, g, options);
 }
 
 }  // namespace dvso::vo
