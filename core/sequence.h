@@ -23,6 +23,13 @@
 
 namespace dvso {
 
+// Which stereo pair of a KITTI layout (raw drive or odometry folder) is the sequence's left/right pair:
+// the grey cameras 00/01 (odometry and labels) or the colour cameras 02/03 (read as grey for the odometry,
+// as colour for the network). Colour images are offered beside the grey pair (has_color) only when they
+// were taken from the grey cameras' centres (the simulator's sequences): on KITTI they are another
+// viewpoint 6 cm away, and a map or label made on one pair is misplaced by ~12 % of its disparity on the other.
+enum class CameraPair { kGrey, kColour };
+
 struct StereoFrame {
   int index = 0;          // 0-based position in the sequence
   double timestamp = 0;   // seconds
@@ -43,6 +50,9 @@ class SequenceReader {
   virtual int size() const = 0;
   virtual bool is_stereo() const = 0;
   virtual bool has_color() const = 0;
+  // The KITTI camera pair the frames come from: the one asked for, or colour 02/03 where a folder has no
+  // grey cameras (outputs record it; labels / maps of another pair are refused). Grey for other layouts.
+  virtual CameraPair camera_pair() const { return CameraPair::kGrey; }
   // Rectified intrinsics (and baseline for stereo; 0 for monocular).
   virtual const StereoCamera& camera() const = 0;
   // Timestamps of all frames (seconds), size() entries.
@@ -73,12 +83,6 @@ inline std::string CountPastEndWarning(int size, int first, int count) {
          std::to_string(size - first) + " frames";
 }
 
-// Which stereo pair of a KITTI layout (raw drive or odometry folder) is the sequence's left/right pair:
-// the grey cameras 00/01 (odometry and labels) or the colour cameras 02/03 (read as grey for the odometry,
-// as colour for the network). Colour images are offered beside the grey pair (has_color) only when they
-// were taken from the grey cameras' centres (the simulator's sequences): on KITTI they are another
-// viewpoint 6 cm away, and a map or label made on one pair is misplaced by ~12 % of its disparity on the other.
-enum class CameraPair { kGrey, kColour };
 // "grey" | "colour" (also "gray", "color"); throws dvso::Error otherwise.
 CameraPair ParseCameraPair(const std::string& name);
 // "grey" | "colour": the name outputs record (labels_summary.json, prediction_info.json).

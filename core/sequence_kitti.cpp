@@ -140,6 +140,7 @@ class KittiSequence : public SequenceReader {
     const bool colour_is_left = pair == CameraPair::kColour || !has_grey;
     RequireFile(!colour_is_left || has_colour, JoinPath(root, "image_2"),
                 has_grey ? "no colour camera (--cameras colour needs image_2/)" : "no image_0/ or image_2/ folder");
+    pair_ = colour_is_left ? CameraPair::kColour : CameraPair::kGrey;
     left_dir_ = JoinPath(root, colour_is_left ? "image_2" : "image_0");
     right_dir_ = JoinPath(root, colour_is_left ? "image_3" : "image_1");
     files_ = internal::ListImages(left_dir_);
@@ -176,6 +177,7 @@ class KittiSequence : public SequenceReader {
   int size() const override { return static_cast<int>(files_.size()); }
   bool is_stereo() const override { return stereo_; }
   bool has_color() const override { return color_; }
+  CameraPair camera_pair() const override { return pair_; }
   const StereoCamera& camera() const override { return camera_; }
   const std::vector<double>& timestamps() const override { return timestamps_; }
   const std::string& root() const override { return root_; }
@@ -204,6 +206,7 @@ class KittiSequence : public SequenceReader {
   std::vector<std::string> files_;
   StereoCamera camera_;
   bool stereo_ = false, color_ = false;
+  CameraPair pair_ = CameraPair::kGrey;  // the pair read (colour where there are no grey images)
   std::vector<double> timestamps_;
 };
 

@@ -215,6 +215,7 @@ class KittiRawSequence : public SequenceReader {
   int size() const override { return static_cast<int>(frames_.size()); }
   bool is_stereo() const override { return stereo_; }
   bool has_color() const override { return color_; }
+  CameraPair camera_pair() const override { return colour_is_left_ ? CameraPair::kColour : CameraPair::kGrey; }
   const StereoCamera& camera() const override { return camera_; }
   const std::vector<double>& timestamps() const override { return timestamps_; }
   const std::string& root() const override { return root_; }

@@ -11,8 +11,6 @@
 
 namespace dvso {
 namespace {
-constexpr double kVariedCameraHeightRange = 0.1;  // varied look: camera height 1.65 +- this (m)
-constexpr double kVariedHeightJitter = 0.03;      // varied look: per-frame height bounce bound (m)
 }  // namespace
 
 void SimulatorOptions::Check() const {

@@ -20,6 +20,9 @@
 
 namespace dvso {
 
+constexpr double kVariedCameraHeightRange = 0.1;  // varied look: camera height = camera_height +- this (m)
+constexpr double kVariedHeightJitter = 0.03;      // varied look: per-frame height bounce bound at least this (m)
+
 struct SimulatorOptions {
   std::string trajectory_path;      // KITTI pose file (camera-to-world); empty = generated driving path
   int first_frame = 0;              // index of the first trajectory pose rendered
@@ -48,9 +51,9 @@ struct SimulatorOptions {
   double height_jitter = 0.0;       // camera height bounce (m, bound of a smooth per-frame offset); GT poses include it
   // Varied look drawn from the seed: scene.appearance = RandomAppearance(seed),
   // exposure level 0.6-1.1 (replacing exposure_level), camera_height + a random
-  // +-0.1 m, height jitter at least 0.03 m (applied by the constructor;
-  // `dvso simulate --appearance varied`, which therefore refuses an explicit
-  // --exposure-level, --camera-height or --height-jitter beside it).
+  // +-kVariedCameraHeightRange, height jitter at least kVariedHeightJitter (applied
+  // by the constructor; `dvso simulate --appearance varied`, which therefore refuses
+  // an explicit --exposure-level, or a --height-jitter below that minimum, beside it).
   bool vary_appearance = false;
 
   // Throws dvso::Error naming the offending option.

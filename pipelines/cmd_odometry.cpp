@@ -41,10 +41,8 @@ void Run(const OdometryArgs& args) {
   const StereoCamera& cam = sequence->camera();
   PredictionSource predictions;
   if (vo::CapabilitiesOf(mode).has_predictions) {
-    PredictionSourceArgs prediction_args = args.predictions;
-    prediction_args.cameras = args.cameras;  // maps that `predict` made on another pair are refused
-    predictions = OpenPredictionSource(prediction_args, *sequence);
-    ApplyPredictionSource(prediction_args, &predictions, &options);
+    predictions = OpenPredictionSource(args.predictions, *sequence);
+    ApplyPredictionSource(args.predictions, &predictions, &options);
   } else {
     // Not an error: scripts pass one set of extra options to every mode (benchmarks/run_dvso.sh).
     if (args.predictions.virtual_baseline > 0 || !args.predictions.schedule.empty() || args.inference_threads_given) {

@@ -3,6 +3,7 @@
 #include <iostream>
 #include <memory>
 #include <set>
+#include <sstream>
 #include <string>
 
 #include "core/error.h"
@@ -55,12 +56,16 @@ void Run(SimulateArgs& args) {
   o.edge_antialiasing = !args.no_edge_aa;
   o.vary_appearance = args.appearance == "varied";
   const auto given = [&](const char* option) { return args.given.count(option) > 0; };
-  // The varied look draws the exposure and the camera height from the seed (StreetSimulator: the level is
-  // replaced, a random +-0.1 m added to the height, the jitter raised to at least 0.03 m): a given value
-  // would be silently changed.
-  for (const char* option : {"--exposure-level", "--height-jitter", "--camera-height"}) {
-    Require(!(o.vary_appearance && given(option)),
-            std::string(option) + " acts with --appearance fixed only (the varied look draws it from the seed)");
+  // The varied look draws the exposure from the seed (a given level would be silently replaced) and raises
+  // the height jitter to at least kVariedHeightJitter (a smaller given one would be); a given camera height
+  // stays the centre of the look's +-kVariedCameraHeightRange.
+  Require(!(o.vary_appearance && given("--exposure-level")),
+          "--exposure-level acts with --appearance fixed only (the varied look draws it from the seed)");
+  if (o.vary_appearance && given("--height-jitter") && o.height_jitter < kVariedHeightJitter) {
+    std::ostringstream message;
+    message << "--height-jitter below " << kVariedHeightJitter
+            << " m acts with --appearance fixed only (the varied look bounces at least that much)";
+    throw Error(message.str());
   }
   // A value for an effect that is switched off would be silently ignored.
   struct ValueOfSwitchedOffEffect {

@@ -59,9 +59,10 @@ std::string ShippedModelPath() {
   return std::filesystem::is_regular_file(path) ? path : "";
 }
 
-void RequireMapsOfCameraPair(const std::string& maps_dir, const std::string& cameras) {
-  if (maps_dir.empty() || cameras.empty()) return;
-  const std::string record = (std::filesystem::path(maps_dir).parent_path() / kPredictionInfoFile).string();
+void RequireMapsOfCameraPair(const std::string& maps_dir, CameraPair pair) {
+  if (maps_dir.empty()) return;
+  // (A trailing slash, as tab completion writes it, must not move the record's folder.)
+  const std::string record = (NormalizedFolderPath(maps_dir).parent_path() / kPredictionInfoFile).string();
   if (!std::filesystem::is_regular_file(record)) return;
   nlohmann::json j;
   try {
@@ -71,7 +72,7 @@ void RequireMapsOfCameraPair(const std::string& maps_dir, const std::string& cam
     throw Error(record, std::string("cannot parse: ") + e.what());
   }
   if (!j.contains("cameras") || !j["cameras"].is_string()) return;
-  const std::string want = CameraPairName(ParseCameraPair(cameras));
+  const std::string want = CameraPairName(pair);
   const std::string made = j["cameras"].get<std::string>();
   RequireFile(made == want, record,
               "the maps were predicted on the " + made + " pair, this run reads the " + want + " pair: pass --cameras " +
@@ -87,8 +88,8 @@ PredictionSource OpenPredictionSource(const PredictionSourceArgs& args, const Se
     std::vector<std::string> names;
     names.reserve(sequence.size());
     for (int i = 0; i < sequence.size(); ++i) names.push_back(sequence.FrameName(i));
-    RequireMapsOfCameraPair(args.disparity_left, args.cameras);
-    RequireMapsOfCameraPair(args.disparity_right, args.cameras);
+    RequireMapsOfCameraPair(args.disparity_left, sequence.camera_pair());
+    RequireMapsOfCameraPair(args.disparity_right, sequence.camera_pair());
     out.source = std::make_unique<FileDisparitySource>(args.disparity_left, args.disparity_right, std::move(names));
     // Precomputed disparities are taken to be in this camera's stereo geometry.
     out.virtual_baseline = args.virtual_baseline > 0 ? args.virtual_baseline : sequence.camera().baseline;

@@ -25,7 +25,6 @@ struct PredictionSourceArgs {
   double virtual_baseline = 0;     // > 0 overrides b_v
   std::string schedule;            // "" = the config's dvso.prediction_timing; else keyframe-async | keyframe-blocking | speculative
   int threads = 1;                 // inference threads; 1 measured fastest next to the odometry on 2 cores (0 = cores)
-  std::string cameras;             // the run's camera pair (grey | colour); "" = not checked against predict's record
   void Check() const;
 };
 
@@ -48,8 +47,9 @@ PredictionSource OpenPredictionSource(const PredictionSourceArgs& args, const Se
 // `dvso predict --sequence` records the camera pair its maps belong to in <out>/prediction_info.json.
 inline constexpr const char* kPredictionInfoFile = "prediction_info.json";
 // Throws dvso::Error naming the record when the maps in `maps_dir` (predict's left/ or right/, record one
-// folder up) were predicted on another pair than `cameras`; maps without a record are not checked.
-void RequireMapsOfCameraPair(const std::string& maps_dir, const std::string& cameras);
+// folder up) were predicted on another pair than `pair` (the run's sequence reads); maps without a record
+// are not checked.
+void RequireMapsOfCameraPair(const std::string& maps_dir, CameraPair pair);
 
 // Loads a TorchScript model as a DisparitySource (torch builds; others throw).
 std::unique_ptr<DisparitySource> OpenModelDisparitySource(const std::string& path, int threads,

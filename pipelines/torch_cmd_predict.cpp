@@ -60,7 +60,7 @@ void RunPredict(const PredictArgs& args) {
                             : IsKittiRawDrive(args.sequence) ? CameraPair::kColour
                                                              : CameraPair::kGrey;
     sequence = OpenSequence(args.sequence, "", pair);
-    cameras = CameraPairName(pair);
+    cameras = CameraPairName(sequence->camera_pair());  // the pair read (colour where there is no grey)
   } else {
     // The sequence readers' own listing, so that `odometry --sequence` over the same images (e.g. a KITTI
     // image_0/) finds a map for every frame it reads: a rule of predict's own skipped some of them.
@@ -74,6 +74,9 @@ void RunPredict(const PredictArgs& args) {
   const int count = sequence ? sequence->size() : static_cast<int>(files.size());
   // Output folders only once the inputs are known to be usable (a typo leaves nothing behind).
   for (const char* sub : {"left", "right"}) EnsureDirectory(JoinPath(args.out, sub));
+  // An earlier run's record of its camera pair goes before the first map is replaced (this run writes its
+  // own at the end): a killed rerun must not leave it over a mix of maps.
+  fs::remove(JoinPath(args.out, kPredictionInfoFile));
   if (!args.no_color) {
     for (const char* sub : {"left_color", "right_color"}) EnsureDirectory(JoinPath(args.out, sub));
   }
@@ -173,9 +176,7 @@ void RunPredict(const PredictArgs& args) {
   // Which pair the maps were predicted on: `odometry --disparity-left` checks it against the pair it reads
   // (a raw drive's colour maps on its grey images sit ~6 cm off). Images without a pair record nothing.
   const std::string info = JoinPath(args.out, kPredictionInfoFile);
-  if (cameras.empty()) {
-    fs::remove(info);
-  } else {
+  if (!cameras.empty()) {
     WriteStreamAtomically(info, [&](std::ostream& out) {
       out << nlohmann::json{{"sequence", args.sequence}, {"cameras", cameras}, {"model", args.model}}.dump(2) << "\n";
     });

@@ -159,6 +159,25 @@ cv::Mat GroundTruth(const std::string& dir, int frame_index, int width, int heig
   return gt;
 }
 
+// Labels already in the folder were made on the pair its summary names: a resume that reads another pair
+// would keep them and record the new pair over them (training would then take grey labels for colour
+// ones), so it is an error unless they are all rewritten (--overwrite).
+void RequireSameCameraPairOnResume(const std::string& summary_path, CameraPair pair, bool overwrite) {
+  if (overwrite || !fs::is_regular_file(summary_path)) return;
+  nlohmann::json j;
+  try {
+    std::ifstream in(summary_path);
+    in >> j;
+  } catch (const std::exception& e) {
+    throw Error(summary_path, std::string("cannot parse: ") + e.what());
+  }
+  if (!j.contains("cameras") || !j["cameras"].is_string()) return;
+  const std::string made = j["cameras"].get<std::string>();
+  RequireFile(made == CameraPairName(pair), summary_path,
+              "the labels in this folder were made on the " + made + " pair, this run reads the " +
+                  CameraPairName(pair) + " pair: pass --overwrite or another --out");
+}
+
 // A label file already in the output folder, read back for the summary: it must be a map of the
 // sequence's images (a folder left over from another sequence or camera is an error naming the file,
 // found before the odometry runs, not when its frame comes up hours later).
@@ -196,7 +215,7 @@ LabelRunSummary RunLabelExtraction(const std::string& sequence_dir, const std::s
 
   LabelRunSummary summary;
   summary.sequence = sequence_dir;
-  summary.cameras = CameraPairName(options.cameras);
+  summary.cameras = CameraPairName(sequence->camera_pair());
   summary.right_labels = options.labels.right_labels;
   // Label files already there (none count with overwrite): all of them = resume without running; some
   // = a partial resume, where LabelProducer keeps them (it writes only missing ones).
@@ -208,6 +227,8 @@ LabelRunSummary RunLabelExtraction(const std::string& sequence_dir, const std::s
     complete = complete && kept[i - options.first] && (!options.labels.right_labels || kept_right[i - options.first]);
   }
   const int width = sequence->camera().left.width, height = sequence->camera().left.height;
+  RequireSameCameraPairOnResume(JoinPath(out_dir, "labels_summary.json"), sequence->camera_pair(),
+                                options.labels.overwrite);
   // The first frame's ground truth is read now: a GT folder of another resolution (or without the
   // sequence's frame names) fails before the odometry runs, not at the first labelled frame minutes in.
   GroundTruth(options.gt_disparity_dir, options.first, width, height);

@@ -95,7 +95,7 @@ std::unique_ptr<SequenceReader> OpenTrainingSequence(const std::string& root) {
 
 void RequireLabelsOfTrainingPair(const std::string& label_dir, CameraPair training_pair) {
   if (label_dir.empty()) return;
-  const fs::path dir(label_dir);
+  const fs::path dir = NormalizedFolderPath(label_dir);  // a trailing slash must not move the parent
   for (const fs::path& summary : {dir / "labels_summary.json", dir.parent_path() / "labels_summary.json"}) {
     if (!fs::is_regular_file(summary)) continue;
     std::ifstream in(summary);
@@ -108,8 +108,9 @@ void RequireLabelsOfTrainingPair(const std::string& label_dir, CameraPair traini
     if (!j.contains("cameras")) return;  // written before labels named their pair
     const std::string want = CameraPairName(training_pair);
     RequireFile(j["cameras"].is_string() && j["cameras"].get<std::string>() == want, summary.string(),
-                "these labels were made on the " + j["cameras"].dump() + " pair, training reads the " + want +
-                    " pair of this sequence: run `dvso labels --cameras " + want + "`");
+                "these labels were made on the " + (j["cameras"].is_string() ? j["cameras"].get<std::string>() : j["cameras"].dump()) +
+                    " pair, training reads the " + want + " pair of this sequence: run `dvso labels --cameras " + want +
+                    " --overwrite`");
     return;
   }
 }
@@ -187,7 +188,7 @@ int StereoDataset::AddSequence(const std::string& root) {
   seq.left_labels = dir_if_exists(options_.label_dir_left);
   seq.right_labels = dir_if_exists(options_.label_dir_right);
   for (const std::string& labels : {seq.left_labels, seq.right_labels}) {
-    RequireLabelsOfTrainingPair(labels, TrainingCameraPair(root));
+    RequireLabelsOfTrainingPair(labels, seq.reader->camera_pair());  // the pair read (colour where no grey)
   }
   if (seq.left_labels.empty() && seq.right_labels.empty()) {
     // Until Stereo DSO labels exist for this sequence: sparse samples of the simulator's GT.

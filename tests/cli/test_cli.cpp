@@ -247,15 +247,14 @@ TEST(Cli, LabelListWithTwoSequencesOfOneNameIsAnError) {
 }
 
 // Options that another option would silently override or ignore are errors, like --exposure-level with
-// --appearance varied: the varied look draws the camera height and its jitter from the seed, a switched-off
-// effect has no strength, and a trajectory file sets the speed.
+// --appearance varied: the varied look raises a smaller height jitter to its minimum, a switched-off effect
+// has no strength, and a trajectory file sets the speed.
 TEST(Cli, SimulateRejectsOptionsThatWouldBeOverriddenOrIgnored) {
   const std::string dir = TempDir("simulate_ignored");
   std::ofstream(dir + "/poses.txt") << "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 0 0 1 0 0 0 0 1 1\n";
   const std::string common = "simulate --quiet --count 1 --width 96 --height 32 --texture-size 64 --out " + dir + "/o";
   const std::vector<std::pair<std::string, std::string>> cases = {
       {" --appearance varied --height-jitter 0.02", "--height-jitter"},
-      {" --appearance varied --camera-height 1.5", "--camera-height"},
       {" --no-noise --noise-sigma 2", "--noise-sigma"},
       {" --no-vignetting --vignetting 0.2", "--vignetting"},
       {" --no-exposure-drift --exposure-sigma 0.05", "--exposure-sigma"},
@@ -270,4 +269,8 @@ TEST(Cli, SimulateRejectsOptionsThatWouldBeOverriddenOrIgnored) {
   const CliRun alone = RunDvso(common + " --height-jitter 0.02 --camera-height 1.5 --noise-sigma 2 --vignetting 0.2 "
                                         "--exposure-sigma 0.05 --speed 5");
   EXPECT_EQ(alone.exit_code, 0) << alone.out;
+  // With the varied look a camera height is the look's centre and a jitter of at least its minimum is used
+  // as given: both act.
+  const CliRun varied = RunDvso(common + " --appearance varied --camera-height 1.5 --height-jitter 0.05");
+  EXPECT_EQ(varied.exit_code, 0) << varied.out;
 }

@@ -129,26 +129,38 @@ TEST(Camera, DsoCameraFileRoundTripAndRelativeIntrinsics) {
   EXPECT_THROW(ReadDsoCameraFile(dir + "/fov.txt"), Error);
 }
 
-TEST(Camera, DsoCameraFileOutputLinesThatWouldResampleAreRefused) {
+TEST(Camera, DsoCameraFileOutputLinesAreReadAndAResampledOutputIsSaid) {
   const std::string dir = TempDir("camfile_out");
   const std::string k = "Pinhole 718.856 718.856 607.1928 185.2157 0\n1241 376\n";
-  // Without distortion crop / full / none, the same size or the input's own intrinsics change nothing.
+  // Without distortion crop / full / none at the same size, or the input's own intrinsics, change nothing.
   for (const std::string out : {"crop\n1241 376\n", "full\n1241 376\n", "none\n1241 376\n",
                                 "718.856 718.856 607.1928 185.2157 0\n1241 376\n", ""}) {
     WriteText(dir + "/same.txt", k + out);
+    ::testing::internal::CaptureStderr();
     const PinholeCamera cam = ReadDsoCameraFile(dir + "/same.txt");
+    EXPECT_EQ(::testing::internal::GetCapturedStderr(), "") << out;
     EXPECT_DOUBLE_EQ(cam.fx, 718.856) << out;
     EXPECT_EQ(cam.width, 1241) << out;
   }
-  // Another output size or other output intrinsics: DSO would resample the images; refused, naming why.
-  for (const std::string out : {"crop\n640 192\n", "none\n620 188\n", "500 500 320 96 0\n1241 376\n",
-                                "crop\n", "stretch\n1241 376\n"}) {
+  // An output DSO would resample to: the input is tracked as it is (same poses), and the run says so.
+  for (const std::string out : {"crop\n640 192\n", "none\n620 188\n", "500 500 320 96 0\n1241 376\n"}) {
     WriteText(dir + "/other.txt", k + out);
+    ::testing::internal::CaptureStderr();
+    const PinholeCamera cam = ReadDsoCameraFile(dir + "/other.txt");
+    const std::string warning = ::testing::internal::GetCapturedStderr();
+    EXPECT_NE(warning.find("other.txt"), std::string::npos) << out;
+    EXPECT_NE(warning.find("not resampled"), std::string::npos) << warning;
+    EXPECT_DOUBLE_EQ(cam.fx, 718.856) << out;
+    EXPECT_EQ(cam.width, 1241) << out;
+  }
+  // Lines that are not DSO's format are errors naming the file.
+  for (const std::string out : {"crop\n", "stretch\n1241 376\n", "crop\n1241\n"}) {
+    WriteText(dir + "/bad.txt", k + out);
     try {
-      ReadDsoCameraFile(dir + "/other.txt");
+      ReadDsoCameraFile(dir + "/bad.txt");
       ADD_FAILURE() << "accepted: " << out;
     } catch (const Error& e) {
-      EXPECT_NE(std::string(e.what()).find("other.txt"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("bad.txt"), std::string::npos) << e.what();
     }
   }
 }

@@ -83,6 +83,26 @@ TEST(KittiSequenceColour, EmptyColourFolderIsNoColourCamera) {
   EXPECT_TRUE(OpenKittiSequence(dir.path.string())->has_color());
 }
 
+// The pair a reader reports is the one it reads: the colour pair asked for, or colour where a folder has no
+// grey cameras (labels and predicted maps record it, training and odometry compare it).
+TEST(KittiSequenceColour, ThePairReadIsReported) {
+  const testing::TempDir dir("kitti_pair_read");
+  WriteKittiCalibration(dir / "calib.txt", StereoCamera{}.Resized(96, 32));
+  const cv::Mat grey(32, 96, CV_8UC1, cv::Scalar(100));
+  const cv::Mat colour(32, 96, CV_8UC3, cv::Scalar(10, 20, 30));
+  for (const char* sub : {"image_2", "image_3"}) {
+    fs::create_directories(dir.path / sub);
+    ASSERT_TRUE(cv::imwrite(dir / (std::string(sub) + "/000000.png"), colour));
+  }
+  EXPECT_EQ(OpenKittiSequence(dir.path.string())->camera_pair(), CameraPair::kColour);  // no grey cameras
+  for (const char* sub : {"image_0", "image_1"}) {
+    fs::create_directories(dir.path / sub);
+    ASSERT_TRUE(cv::imwrite(dir / (std::string(sub) + "/000000.png"), grey));
+  }
+  EXPECT_EQ(OpenKittiSequence(dir.path.string())->camera_pair(), CameraPair::kGrey);
+  EXPECT_EQ(OpenKittiSequence(dir.path.string(), CameraPair::kColour)->camera_pair(), CameraPair::kColour);
+}
+
 // A writer killed between writing and renaming leaves NAME.tmp-writing.png (core/fs_util.h): never a frame.
 TEST(SequenceListing, UnfinishedAtomicWritesAreNoFrames) {
   const testing::TempDir dir("list_unfinished");

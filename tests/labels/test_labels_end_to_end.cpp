@@ -150,6 +150,18 @@ TEST(LabelsEndToEnd, BatchListAndErrors) {
     EXPECT_NE(what.find("208x64"), std::string::npos) << what;
   }
   EXPECT_FALSE(fs::exists(seq + "_small/000000.png"));
+  // A resume into labels of another camera pair would keep them under this run's pair: refused unless
+  // --overwrite rewrites them.
+  options.gt_disparity_dir.clear();
+  fs::create_directories(seq + "_pair");
+  std::ofstream(seq + "_pair/labels_summary.json") << "{\"cameras\": \"colour\"}";
+  try {
+    labels::RunLabelExtraction(seq, seq + "_pair", options);
+    ADD_FAILURE() << "labels of the colour pair resumed on the grey pair";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("--overwrite"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(fs::exists(seq + "_pair/000000.png"));
 }
 
 TEST(LabelsEndToEnd, ConfigIsStrict) {

@@ -427,6 +427,7 @@ TEST(Data, LabelsOfAnotherCameraPairAreRefused) {
       EXPECT_NE(what.find("dvso labels --cameras colour"), std::string::npos) << what;
     }
   }
+  EXPECT_THROW(RequireLabelsOfTrainingPair(dir + "/labels/right/", CameraPair::kColour), Error);  // trailing slash
   EXPECT_EQ(TrainingCameraPair(dir), CameraPair::kGrey);  // not a raw drive
 }
 

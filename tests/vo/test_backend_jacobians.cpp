@@ -265,6 +265,10 @@ TEST(BackendJacobians, CouplingWeightsScaleTheEnergyButNotTheOutlierTest) {
     EvaluateResidual(GeometryFor(f, kind), p, idepth, f.options, false, &heavy);
     EXPECT_NEAR(heavy.energy, 4.0f * unit.energy, 1e-3f * unit.energy) << static_cast<int>(kind);
     EXPECT_EQ(heavy.state, ResidualState::kActive) << static_cast<int>(kind);
+    // The energy an out-of-bounds residual counts with across an LM step is the largest one an active
+    // residual of its kind can have: weighted too, or worsening such a residual would look free.
+    EXPECT_FLOAT_EQ(CappedResidualEnergy(f.options, kind), 4.0f * CappedResidualEnergy(f.options, ResidualKind::kTemporal));
+    EXPECT_LE(heavy.energy, CappedResidualEnergy(f.options, kind));
     f.options = original;
   }
 }

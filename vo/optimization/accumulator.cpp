@@ -109,7 +109,6 @@ const ResidualGeometry* WindowGeometry::For(int h, const Residual& residual, int
 WindowEnergy EvaluateWindowEnergy(std::vector<Keyframe>* keyframes, const StereoCamera& camera,
                                   const WindowOptions& options, bool write_states) {
   const WindowGeometry geometry(*keyframes, camera, options);
-  const float cap = CappedResidualEnergy(options);
   WindowEnergy energy;
   ResidualEvaluation ev;
   for (int h = 0; h < geometry.num_frames; ++h) {
@@ -136,6 +135,7 @@ WindowEnergy EvaluateWindowEnergy(std::vector<Keyframe>* keyframes, const Stereo
           EvaluateResidual(*g, point, point.idepth, options, false, &ev);
         }
         if (residual->state == ResidualState::kActive) {
+          const float cap = CappedResidualEnergy(options, kind);
           energy.comparable += ev.state == ResidualState::kOutOfBounds ? cap : std::min(ev.energy, cap);
         }
         if (ev.state == ResidualState::kActive) energy.active += ev.energy;
@@ -243,7 +243,7 @@ void WindowLinearizer::ProcessResidual(size_t i, int h, Point* point_ptr, Residu
   const bool was_active = residual.state == ResidualState::kActive;
   if (geometry == nullptr) {
     residual.state = ResidualState::kOutOfBounds;
-    if (was_active) partial->comparable += CappedResidualEnergy(options_);
+    if (was_active) partial->comparable += CappedResidualEnergy(options_, residual.kind);
     return;
   }
   ev.state = ResidualState::kActive;
@@ -251,8 +251,8 @@ void WindowLinearizer::ProcessResidual(size_t i, int h, Point* point_ptr, Residu
   residual.state = ev.state;
   residual.energy = ev.state == ResidualState::kOutOfBounds ? 0.0f : ev.energy;
   if (was_active) {
-    partial->comparable += ev.state == ResidualState::kOutOfBounds ? CappedResidualEnergy(options_)
-                                                                    : std::min(ev.energy, CappedResidualEnergy(options_));
+    const float cap = CappedResidualEnergy(options_, residual.kind);
+    partial->comparable += ev.state == ResidualState::kOutOfBounds ? cap : std::min(ev.energy, cap);
   }
   if (ev.state != ResidualState::kActive) return;
   partial->energy += ev.energy;

@@ -114,7 +114,7 @@ ResidualGeometry TemporalGeometry(const Keyframe& host, const Keyframe& target, 
   g.affine_scale = static_cast<float>(std::exp(target.a - host.a));
   g.b_host = static_cast<float>(host.b);
   g.b_target = static_cast<float>(target.b);
-  g.term_weight = 1.0f;
+  g.term_weight = ResidualTermWeight(ResidualKind::kTemporal, options);
   g.target = &target.left->level(0);
   g.has_frame_jacobians = true;
   return g;
@@ -130,7 +130,7 @@ ResidualGeometry StaticStereoGeometry(const Keyframe& host, const StereoCamera& 
   g.t_fej = g.t;
   // The right image shares the host's affine brightness: e^{a-a} = 1, b cancels.
   g.affine_scale = 1.0f;
-  g.term_weight = static_cast<float>(options.static_stereo_weight);
+  g.term_weight = ResidualTermWeight(ResidualKind::kStaticStereo, options);
   g.target = &host.right->level(0);
   g.has_frame_jacobians = false;
   return g;
@@ -142,7 +142,7 @@ ResidualGeometry VirtualStereoGeometry(const Keyframe& host, const PinholeCamera
   g.kind = ResidualKind::kVirtualStereo;
   SetIntrinsics(camera, &g);
   g.baseline = static_cast<float>(options.virtual_stereo_baseline);
-  g.term_weight = static_cast<float>(options.virtual_stereo_weight);
+  g.term_weight = ResidualTermWeight(ResidualKind::kVirtualStereo, options);
   g.target = &host.left->level(0);
   g.disparity = &host.right_disparity;
   g.has_frame_jacobians = false;

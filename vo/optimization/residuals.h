@@ -84,10 +84,25 @@ void EvaluateResidual(const ResidualGeometry& geometry, const Point& point, doub
 // overlap with the current one's arithmetic. No effect on results.
 void PrefetchResidual(const ResidualGeometry& geometry, const Point& point, double idepth);
 
-// Energy that an out-of-bounds/outlier residual counts with when comparing
-// energies across an LM step (so that leaving the image is not "free").
-inline float CappedResidualEnergy(const WindowOptions& options) {
-  return static_cast<float>(kPatternSize * options.outlier_energy_threshold);
+// The coupling weight of a residual kind in the total energy: 1 (temporal), mu (static stereo), lambda
+// (virtual stereo).
+inline float ResidualTermWeight(ResidualKind kind, const WindowOptions& options) {
+  switch (kind) {
+    case ResidualKind::kStaticStereo:
+      return static_cast<float>(options.static_stereo_weight);
+    case ResidualKind::kVirtualStereo:
+      return static_cast<float>(options.virtual_stereo_weight);
+    case ResidualKind::kTemporal:
+      break;
+  }
+  return 1.0f;
+}
+
+// Energy that an out-of-bounds/outlier residual of `kind` counts with when comparing energies across an LM
+// step (so that leaving the image is not "free"): the outlier threshold's energy at the term's weight, the
+// largest weighted energy an active residual of that kind can have (the outlier test is before the weight).
+inline float CappedResidualEnergy(const WindowOptions& options, ResidualKind kind) {
+  return static_cast<float>(kPatternSize * options.outlier_energy_threshold) * ResidualTermWeight(kind, options);
 }
 
 }  // namespace dvso::vo
