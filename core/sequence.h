@@ -87,6 +87,10 @@ inline std::string CountPastEndWarning(int size, int first, int count) {
 CameraPair ParseCameraPair(const std::string& name);
 // "grey" | "colour": the name outputs record (labels_summary.json, prediction_info.json).
 std::string CameraPairName(CameraPair pair);
+// The pair an output records in its JSON file ("cameras": "grey" | "colour"; labels_summary.json,
+// prediction_info.json): nullopt when the file does not exist or records none (written before outputs
+// named their pair). Throws dvso::Error naming the file when it cannot be parsed or names another value.
+std::optional<CameraPair> RecordedCameraPair(const std::string& json_path);
 
 // Opens a sequence, detecting the layout: KITTI (calib.txt), EuRoC (mav0/ or
 // cam0/data.csv), or a monocular folder (needs camera_file). `pair` chooses the

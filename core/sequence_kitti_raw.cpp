@@ -19,6 +19,7 @@
 #include <fstream>
 #include <iomanip>
 #include <iostream>
+#include <nlohmann/json.hpp>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -333,5 +334,23 @@ CameraPair ParseCameraPair(const std::string& name) {
 }
 
 std::string CameraPairName(CameraPair pair) { return pair == CameraPair::kColour ? "colour" : "grey"; }
+
+std::optional<CameraPair> RecordedCameraPair(const std::string& json_path) {
+  if (!std::filesystem::is_regular_file(json_path)) return std::nullopt;
+  nlohmann::json j;
+  try {
+    std::ifstream in(json_path);
+    in >> j;
+  } catch (const std::exception& e) {
+    throw Error(json_path, std::string("cannot parse: ") + e.what());
+  }
+  if (!j.is_object() || !j.contains("cameras")) return std::nullopt;
+  RequireFile(j["cameras"].is_string(), json_path, "\"cameras\" must be \"grey\" or \"colour\"");
+  try {
+    return ParseCameraPair(j["cameras"].get<std::string>());
+  } catch (const Error&) {
+    throw Error(json_path, "\"cameras\" must be \"grey\" or \"colour\", not " + j["cameras"].dump());
+  }
+}
 
 }  // namespace dvso

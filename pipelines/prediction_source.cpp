@@ -1,8 +1,6 @@
 #include "pipelines/prediction_source.h"
 
 #include <filesystem>
-#include <fstream>
-#include <nlohmann/json.hpp>
 #include <sstream>
 #include <vector>
 
@@ -63,20 +61,11 @@ void RequireMapsOfCameraPair(const std::string& maps_dir, CameraPair pair) {
   if (maps_dir.empty()) return;
   // (A trailing slash, as tab completion writes it, must not move the record's folder.)
   const std::string record = (NormalizedFolderPath(maps_dir).parent_path() / kPredictionInfoFile).string();
-  if (!std::filesystem::is_regular_file(record)) return;
-  nlohmann::json j;
-  try {
-    std::ifstream in(record);
-    in >> j;
-  } catch (const std::exception& e) {
-    throw Error(record, std::string("cannot parse: ") + e.what());
-  }
-  if (!j.contains("cameras") || !j["cameras"].is_string()) return;
-  const std::string want = CameraPairName(pair);
-  const std::string made = j["cameras"].get<std::string>();
-  RequireFile(made == want, record,
-              "the maps were predicted on the " + made + " pair, this run reads the " + want + " pair: pass --cameras " +
-                  made + " (or predict with --cameras " + want + ")");
+  const std::optional<CameraPair> recorded = RecordedCameraPair(record);
+  if (!recorded || *recorded == pair) return;
+  const std::string made = CameraPairName(*recorded), want = CameraPairName(pair);
+  throw Error(record, "the maps were predicted on the " + made + " pair, this run reads the " + want +
+                          " pair: pass --cameras " + made + " (or predict with --cameras " + want + ")");
 }
 
 PredictionSource OpenPredictionSource(const PredictionSourceArgs& args, const SequenceReader& sequence) {

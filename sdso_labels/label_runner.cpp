@@ -163,19 +163,11 @@ cv::Mat GroundTruth(const std::string& dir, int frame_index, int width, int heig
 // would keep them and record the new pair over them (training would then take grey labels for colour
 // ones), so it is an error unless they are all rewritten (--overwrite).
 void RequireSameCameraPairOnResume(const std::string& summary_path, CameraPair pair, bool overwrite) {
-  if (overwrite || !fs::is_regular_file(summary_path)) return;
-  nlohmann::json j;
-  try {
-    std::ifstream in(summary_path);
-    in >> j;
-  } catch (const std::exception& e) {
-    throw Error(summary_path, std::string("cannot parse: ") + e.what());
-  }
-  if (!j.contains("cameras") || !j["cameras"].is_string()) return;
-  const std::string made = j["cameras"].get<std::string>();
-  RequireFile(made == CameraPairName(pair), summary_path,
-              "the labels in this folder were made on the " + made + " pair, this run reads the " +
-                  CameraPairName(pair) + " pair: pass --overwrite or another --out");
+  if (overwrite) return;
+  const std::optional<CameraPair> made = RecordedCameraPair(summary_path);
+  RequireFile(!made || *made == pair, summary_path,
+              "the labels in this folder were made on the " + CameraPairName(made.value_or(pair)) +
+                  " pair, this run reads the " + CameraPairName(pair) + " pair: pass --overwrite or another --out");
 }
 
 // A label file already in the output folder, read back for the summary: it must be a map of the

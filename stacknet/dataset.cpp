@@ -2,9 +2,7 @@
 
 #include <algorithm>
 #include <filesystem>
-#include <fstream>
 #include <map>
-#include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
@@ -98,17 +96,10 @@ void RequireLabelsOfTrainingPair(const std::string& label_dir, CameraPair traini
   const fs::path dir = NormalizedFolderPath(label_dir);  // a trailing slash must not move the parent
   for (const fs::path& summary : {dir / "labels_summary.json", dir.parent_path() / "labels_summary.json"}) {
     if (!fs::is_regular_file(summary)) continue;
-    std::ifstream in(summary);
-    nlohmann::json j;
-    try {
-      in >> j;
-    } catch (const std::exception& e) {
-      throw Error(summary.string(), std::string("cannot parse: ") + e.what());
-    }
-    if (!j.contains("cameras")) return;  // written before labels named their pair
+    const std::optional<CameraPair> made = RecordedCameraPair(summary.string());
     const std::string want = CameraPairName(training_pair);
-    RequireFile(j["cameras"].is_string() && j["cameras"].get<std::string>() == want, summary.string(),
-                "these labels were made on the " + (j["cameras"].is_string() ? j["cameras"].get<std::string>() : j["cameras"].dump()) +
+    RequireFile(!made || *made == training_pair, summary.string(),
+                "these labels were made on the " + CameraPairName(made.value_or(training_pair)) +
                     " pair, training reads the " + want + " pair of this sequence: run `dvso labels --cameras " + want +
                     " --overwrite`");
     return;

@@ -103,6 +103,19 @@ TEST(KittiSequenceColour, ThePairReadIsReported) {
   EXPECT_EQ(OpenKittiSequence(dir.path.string(), CameraPair::kColour)->camera_pair(), CameraPair::kColour);
 }
 
+TEST(KittiSequenceColour, RecordedPairIsReadStrictly) {
+  const testing::TempDir dir("recorded_pair");
+  EXPECT_FALSE(RecordedCameraPair(dir / "none.json").has_value());  // no record
+  std::ofstream(dir / "old.json") << "{\"sequence\": \"s\"}";
+  EXPECT_FALSE(RecordedCameraPair(dir / "old.json").has_value());  // written before outputs named their pair
+  std::ofstream(dir / "colour.json") << "{\"cameras\": \"colour\"}";
+  EXPECT_EQ(RecordedCameraPair(dir / "colour.json"), CameraPair::kColour);
+  std::ofstream(dir / "odd.json") << "{\"cameras\": \"infrared\"}";
+  EXPECT_THROW(RecordedCameraPair(dir / "odd.json"), Error);
+  std::ofstream(dir / "broken.json") << "{\"cameras\": ";
+  EXPECT_THROW(RecordedCameraPair(dir / "broken.json"), Error);
+}
+
 // A writer killed between writing and renaming leaves NAME.tmp-writing.png (core/fs_util.h): never a frame.
 TEST(SequenceListing, UnfinishedAtomicWritesAreNoFrames) {
   const testing::TempDir dir("list_unfinished");
