@@ -25,6 +25,7 @@
 #include "core/sequence_common.h"
 #include "pipelines/commands.h"
 #include "pipelines/prediction_source.h"
+#include "stacknet/dataset.h"
 #include "stacknet/predictor.h"
 
 namespace dvso::cli {
@@ -54,11 +55,10 @@ void RunPredict(const PredictArgs& args) {
   std::string cameras;  // the pair the maps belong to (--sequence only), recorded for `odometry` to check
   std::vector<std::string> files;
   if (!args.sequence.empty()) {
-    // By default the network sees the colour pair of a KITTI raw drive (it was trained on it) and the pair
-    // `odometry` reads by default elsewhere, so that the maps sit on the pixels the odometry tracks.
-    const CameraPair pair = !args.cameras.empty()          ? ParseCameraPair(args.cameras)
-                            : IsKittiRawDrive(args.sequence) ? CameraPair::kColour
-                                                             : CameraPair::kGrey;
+    // By default the network sees the pair it trains on (stacknet::TrainingCameraPair: colour on a KITTI raw
+    // drive, the pair `odometry` reads by default elsewhere, so that the maps sit on the tracked pixels).
+    const CameraPair pair =
+        !args.cameras.empty() ? ParseCameraPair(args.cameras) : stacknet::TrainingCameraPair(args.sequence);
     sequence = OpenSequence(args.sequence, "", pair);
     cameras = CameraPairName(sequence->camera_pair());  // the pair read (colour where there is no grey)
   } else {
