@@ -5,11 +5,13 @@
 // exports an untrained network of that architecture (for `dvso bench`; with
 // --training-baseline and --training-fx-over-width also for `odometry --model`).
 // `dvso export --stamp OLD.pt --out NEW.pt` copies an export with corrected metadata.
+// `dvso export --checkpoint CKPT --weights-only --out W.pt` copies a checkpoint without its Adam state.
 // A metadata option that a mode cannot record is an error, never dropped.
 #include <iostream>
 
 #include "core/error.h"
 #include "pipelines/commands.h"
+#include "stacknet/checkpoint.h"
 #include "stacknet/config.h"
 #include "stacknet/export.h"
 
@@ -20,6 +22,7 @@ void AddExportCommand(CLI::App& app) {
     std::string checkpoint, config, out, stamp, tuned_on;
     double tuned_baseline = 0;
     bool random_init = false;
+    bool weights_only = false;
     stacknet::ExportOptions options;
   };
   auto args = std::make_shared<Args>();
@@ -30,6 +33,9 @@ void AddExportCommand(CLI::App& app) {
   cmd->add_flag("--random-init", args->random_init,
                 "Export untrained weights (latency benchmarks; give the training camera for `odometry --model`)");
   cmd->add_option("--out", args->out, "Output TorchScript file (.pt)")->required();
+  cmd->add_flag("--weights-only", args->weights_only,
+                "Instead of exporting: copy --checkpoint without its optimiser state (a third of the size; "
+                "`dvso export --checkpoint` reads the copy)");
   cmd->add_option("--training-baseline", args->options.training_baseline,
                   "Training camera baseline in metres (default: read from the first sequence its stages trained on; "
                   "--random-init: none)")
@@ -57,7 +63,7 @@ void AddExportCommand(CLI::App& app) {
     const bool tuned_on_given = cmd->count("--tuned-on") > 0;
     if (!args->stamp.empty()) {
       // Stamping copies a network that is already exported: the options that choose or build one do nothing.
-      for (const char* option : {"--checkpoint", "--config", "--random-init", "--model"})
+      for (const char* option : {"--checkpoint", "--config", "--random-init", "--model", "--weights-only"})
         Require(cmd->count(option) == 0, std::string(option) + " exports a network: not with --stamp (it copies one)");
       Require(!tuned_on_given || tuned_baseline_given,
               "--tuned-on names where --tuned-baseline was tuned: give --tuned-baseline too");
@@ -82,6 +88,7 @@ void AddExportCommand(CLI::App& app) {
             "--tuned-baseline / --tuned-on only with --stamp (or `tune-baseline --write-model`)");
     if (args->random_init) {
       Require(!args->config.empty() && args->checkpoint.empty(), "--random-init needs --config (and no --checkpoint)");
+      Require(!args->weights_only, "--weights-only copies a --checkpoint: not with --random-init");
       const stacknet::StackNetConfig config = stacknet::LoadConfig(args->config, /*check=*/false);
       // Exported before anything is printed: a refused export leaves only its error line.
       const std::string description = stacknet::ExportRandomInit(config.network, args->out, args->options);
@@ -90,6 +97,15 @@ void AddExportCommand(CLI::App& app) {
     }
     Require(!args->checkpoint.empty(), "give --checkpoint CKPT (or --config FILE --random-init)");
     Require(args->config.empty(), "--config only with --random-init (a checkpoint carries its own config)");
+    if (args->weights_only) {
+      // A copy of the checkpoint, not a network: the options that describe an export have nothing to go into.
+      for (const char* option : {"--model", "--training-baseline", "--training-fx-over-width", "--config-name"})
+        Require(cmd->count(option) == 0, std::string(option) + " describes an export: not with --weights-only");
+      stacknet::WriteWeightsOnlyCheckpoint(args->checkpoint, args->out);
+      std::cout << "Wrote " << args->out << " (the weights of " << args->checkpoint << ", no optimiser state)"
+                << std::endl;
+      return;
+    }
     const std::string description = stacknet::ExportCheckpoint(args->checkpoint, args->out, args->options);
     std::cout << "Exported " << description << std::endl;
   });

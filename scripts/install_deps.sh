@@ -8,6 +8,7 @@ PACKAGES=(
   libcli11-dev nlohmann-json3-dev libgtest-dev libgmock-dev libbenchmark-dev
   libtorch-dev
   time python3  # benchmarks/*.sh: peak memory (/usr/bin/time -f %M) and their JSON summaries
+  python3-yaml  # scripts/gpu/stage_steps.py (the GPU training script's schedule) and its test
 )
 missing=()
 for p in "${PACKAGES[@]}"; do

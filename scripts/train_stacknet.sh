@@ -21,7 +21,8 @@
 #   scripts/train_stacknet.sh [all|data|train|monitor|export|finetune|tb|eval]    (default: all)
 # Environment:
 #   DVSO=build/dvso                      binary (build with scripts/build.sh)
-#   WORLDS=v4                            training worlds: v4 = 72 of 30 frames, v3 = 36 of 60 frames
+#   WORLDS=v4                            training worlds: v4 = 72 of 30 frames, v3 = 36 of 60 frames,
+#                                        smoke = 3 of 12 frames (tests of the scripts only)
 #   CONFIG=configs/stacknet_cpu_v4_long.yaml  (the shipped model's base run; v3: configs/stacknet_cpu_main.yaml)
 #                                        data paths must point into $DATA
 #   DATA=/tmp/dvso_stacknet_$WORLDS      rendered sequences and labels (~6 GB)
@@ -33,6 +34,7 @@
 #                                        model's config, $RUN/docs for any other)
 #   SNIPPETS=/work/shared/data/kitti_odometry_snippets  real KITTI frames (no depth GT) for a figure
 #   NICE=19                              niceness of the heavy steps (the machine is shared)
+#   JOBS=1                               worlds rendered and labelled at once in the data step
 #   REPO=(script's parent)               repository root (when running a copy of this script)
 # Ablation (documented, not the paper's way): CONFIG=configs/stacknet_cpu_main_gt.yaml
 # trains on GT samples (simulator disp_0, 2 %) instead of Stereo DSO labels;
@@ -58,6 +60,7 @@ TB_VALUES=${TB_VALUES:-0.40:0.04:0.64}
 # Figures and metrics go into docs/ only for the shipped model's config; other runs keep theirs in $RUN/docs.
 DOCS=${DOCS:-$([[ $CONFIG == "$SHIPPED_CONFIG" ]] && echo docs || echo "$RUN/docs")}
 NICE=${NICE:-19}
+JOBS=${JOBS:-1}  # worlds rendered and labelled at once in the data step (the GPU machine has 16 cores)
 FIGURES=${FIGURES:-$(dirname "$DVSO")/tools/stacknet_figures}
 SNIPPETS=${SNIPPETS:-/work/shared/data/kitti_odometry_snippets}
 RENDER_W=640
@@ -105,6 +108,15 @@ EOF
   )
 fi
 TEST_SEGMENTS=("te08 08 1000 150 308" "te09 09 300 150 309" "te10 10 300 150 310")
+# WORLDS=smoke: a few short worlds, for testing this script and scripts/gpu/train_on_device.sh on a machine
+# without a GPU (configs/stacknet_gpu_smoke.yaml trains on them); no model from them means anything.
+if [[ $WORLDS == smoke ]]; then
+  TRAIN_SEGMENTS=("w901 00 248 12 901" "w902 05 225 12 902" "w903 07 173 12 903")
+  TEST_SEGMENTS=("te08 08 1000 10 308" "te09 09 300 10 309" "te10 10 300 10 310")
+fi
+# Held-out frames of the figure docs/stacknet_heldout.png.
+FIGURE_FRAMES=(te08_000030 te08_000110 te09_000070 te10_000120)
+[[ $WORLDS == smoke ]] && FIGURE_FRAMES=(te08_000005 te09_000005 te10_000005)
 # tb worlds (paper: b_v tuned on training sequences): KITTI-size grey sequences along training trajectories,
 # seeds used neither for the network nor for the held-out worlds (docs/dvso.md, session 13).
 TB_WORLDS=("tb05 05 1000 300 9505" "tb00 00 3000 300 9701" "tb02 02 1500 300 9702" "tb07 07 600 300 9703")
@@ -141,10 +153,31 @@ label() {  # name
   mv "$seq/labels_summary.json.tmp" "$seq/labels_summary.json"
 }
 
+# Runs "$@" in the background, at most $JOBS at once; wait_all waits for each and fails if any failed. (Polling
+# instead of `wait -n`: a status that `wait -n` collected is gone for the `wait PID` that counts failures.)
+BACKGROUND=()
+in_background() {
+  while (( $(jobs -rp | wc -l) >= JOBS )); do sleep 1; done
+  "$@" &
+  BACKGROUND+=($!)
+}
+wait_all() {
+  local failed=0 pid
+  for pid in "${BACKGROUND[@]}"; do wait "$pid" || failed=$((failed + 1)); done
+  BACKGROUND=()
+  (( failed == 0 )) || { echo "error: $failed of the parallel data jobs failed (logs in $DATA)" >&2; exit 1; }
+}
+
+world_data() {  # name pose first count seed: render a world, then label it when it is a training world
+  render "$@"
+  if [[ $1 == w* ]]; then label "$1"; fi
+}
+
 step_data() {
   mkdir -p "$DATA"
-  for spec in "${TRAIN_SEGMENTS[@]}" "${TEST_SEGMENTS[@]}"; do render $spec; done
-  for spec in "${TRAIN_SEGMENTS[@]}"; do set -- $spec; label "$1"; done
+  # Longest first (the held-out worlds have 5x the frames), so the last job to start is a short one.
+  for spec in "${TEST_SEGMENTS[@]}" "${TRAIN_SEGMENTS[@]}"; do in_background world_data $spec; done
+  wait_all
   # Held-out image/GT folders with unique names (for one eval-depth over all three).
   for split in all curve; do
     local img="$DATA/heldout_$split/image" gt="$DATA/heldout_$split/gt"
@@ -342,7 +375,7 @@ print(json.dumps({k: result[k]["all"] for k in ("simplenet", "stacknet")}, inden
 EOF
   if [[ -x "$FIGURES" ]]; then
     local rows=()
-    for f in te08_000030 te08_000110 te09_000070 te10_000120; do
+    for f in "${FIGURE_FRAMES[@]}"; do
       rows+=(--row "$DATA/heldout_all/image/$f.png" "$DATA/heldout_all/gt/$f.png" "$RUN/pred_simplenet/left/$f.png"
              "$RUN/pred_stacknet/left/$f.png")
     done

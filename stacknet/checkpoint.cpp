@@ -99,4 +99,10 @@ StackNet LoadModelFromCheckpoint(const std::string& path, CheckpointInfo* info_o
   return model;
 }
 
+void WriteWeightsOnlyCheckpoint(const std::string& checkpoint_path, const std::string& out_path) {
+  CheckpointInfo info;
+  StackNet model = LoadModelFromCheckpoint(checkpoint_path, &info);
+  SaveCheckpoint(out_path, model, nullptr, info);
+}
+
 }  // namespace dvso::stacknet

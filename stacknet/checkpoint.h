@@ -41,4 +41,8 @@ void LoadCheckpointWeights(const std::string& path, StackNet& model, const torch
 // Builds the StackNet of a checkpoint with its weights (CPU, eval use).
 StackNet LoadModelFromCheckpoint(const std::string& path, CheckpointInfo* info = nullptr);
 
+// Copies a checkpoint without its Adam state (a third of the size: what a lent GPU machine sends back, and what
+// `dvso export` needs), same weights, config and position. Throws dvso::Error naming the file.
+void WriteWeightsOnlyCheckpoint(const std::string& checkpoint_path, const std::string& out_path);
+
 }  // namespace dvso::stacknet

@@ -142,6 +142,61 @@ TEST(Export, CheckpointExportUsesTheTrainedNetwork) {
   fs::remove_all(dir);
 }
 
+// What a lent GPU machine sends back (scripts/gpu/train_on_device.sh): the checkpoint without its Adam state, which
+// must export to the same network as the full checkpoint.
+TEST(Export, WeightsOnlyCheckpointExportsTheSameNetwork) {
+  torch::manual_seed(5);
+  StackNetConfig config;
+  config.network = testing::TinyNetwork();
+  config.data.sequences = {"unused"};
+  config.stages.resize(1);
+  StackNet net(config.network);
+  torch::optim::Adam optimizer(net->parameters(), torch::optim::AdamOptions(1e-3));
+  // One step, so the optimiser has state (exp_avg, exp_avg_sq per parameter: twice the weights).
+  const torch::Tensor image = torch::rand({1, 3, 32, 64});
+  net->forward(image).simple.left[0].mean().backward();
+  optimizer.step();
+  const fs::path dir = fs::path(dvso::testing::ScratchPath("export_weights_only"));
+  fs::create_directories(dir);
+  CheckpointInfo info;
+  info.config_yaml = ConfigToYaml(config);
+  info.trained_model = "simple";
+  info.config_name = "stacknet_tiny";
+  info.position.global_step = 17;
+  SaveCheckpoint((dir / "full.pt").string(), net, &optimizer, info);
+  WriteWeightsOnlyCheckpoint((dir / "full.pt").string(), (dir / "weights.pt").string());
+  // Adam keeps two tensors per parameter that had a gradient (here SimpleNet's: ResidualNet was not in the step).
+  EXPECT_LT(fs::file_size(dir / "weights.pt") * 3, fs::file_size(dir / "full.pt") * 2);
+  const CheckpointInfo copied = ReadCheckpointInfo((dir / "weights.pt").string());
+  EXPECT_EQ(copied.config_name, "stacknet_tiny");
+  EXPECT_EQ(copied.position.global_step, 17);
+  EXPECT_EQ(copied.config_yaml, info.config_yaml);
+  ExportOptions options;
+  options.training_baseline = 0.54;
+  options.training_fx_over_width = 0.58;
+  ExportCheckpoint((dir / "full.pt").string(), (dir / "full_model.pt").string(), options);
+  ExportCheckpoint((dir / "weights.pt").string(), (dir / "weights_model.pt").string(), options);
+  torch::jit::Module from_full = torch::jit::load((dir / "full_model.pt").string());
+  torch::jit::Module from_weights = torch::jit::load((dir / "weights_model.pt").string());
+  torch::NoGradGuard no_grad;
+  EXPECT_EQ(MaxDifference(from_full.forward({image}).toTuple()->elements()[0].toTensor(),
+                          from_weights.forward({image}).toTuple()->elements()[0].toTensor()),
+            0.0);
+  // The command refuses what a copy cannot record.
+  const auto refused = dvso::testing::RunDvso("export --checkpoint " + (dir / "full.pt").string() +
+                                              " --weights-only --model stack --out " + (dir / "x.pt").string());
+  EXPECT_NE(refused.exit_code, 0);
+  EXPECT_NE(refused.out.find("--model describes an export"), std::string::npos) << refused.out;
+  const auto copied_cli = dvso::testing::RunDvso("export --checkpoint " + (dir / "full.pt").string() +
+                                                 " --weights-only --out " + (dir / "cli.pt").string());
+  ASSERT_EQ(copied_cli.exit_code, 0) << copied_cli.out;
+  StackNet from_cli = LoadModelFromCheckpoint((dir / "cli.pt").string());
+  net->eval();
+  EXPECT_EQ(MaxDifference(from_cli->forward(image).refined.left[0], net->forward(image).refined.left[0]), 0.0);
+  EXPECT_LT(fs::file_size(dir / "cli.pt") * 3, fs::file_size(dir / "full.pt") * 2);
+  fs::remove_all(dir);
+}
+
 // Training reads a KITTI raw drive through its colour pair 02/03, so the exported model's training
 // camera is that pair's, not the grey pair's, also where the two baselines differ.
 TEST(Export, TrainingCameraOfARawDriveIsItsColourPair) {

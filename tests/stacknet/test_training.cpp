@@ -417,7 +417,7 @@ TEST(Data, LabelsOfAnotherCameraPairAreRefused) {
   std::ofstream(dir + "/labels/labels_summary.json") << "{\"sequence\": \"s\", \"cameras\": \"grey\"}";
   EXPECT_NO_THROW(RequireLabelsOfTrainingPair(dir + "/labels", CameraPair::kGrey));
   EXPECT_NO_THROW(RequireLabelsOfTrainingPair(dir + "/labels/right", CameraPair::kGrey));  // summary one up
-  for (const std::string labels : {dir + "/labels", dir + "/labels/right"}) {
+  for (const std::string& labels : {dir + "/labels", dir + "/labels/right"}) {
     try {
       RequireLabelsOfTrainingPair(labels, CameraPair::kColour);  // a raw drive: training reads 02/03
       ADD_FAILURE() << "grey labels accepted for colour training: " << labels;

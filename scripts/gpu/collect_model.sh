@@ -1,0 +1,37 @@
+#!/usr/bin/env bash
+# Turns what scripts/gpu/train_on_device.sh sent back into a model file: joins the weights-only checkpoint's 15 MiB
+# parts (the device tool returns files of at most 16 MiB), checks them against the checksum computed on the device
+# and exports StackNet with this machine's LibTorch (Debian 1.13: the file every build of `dvso` loads), with the
+# training camera the device recorded.
+#
+#   scripts/gpu/collect_model.sh FILES_DIR [OUT_MODEL]    (env: DVSO=build/dvso; OUT_MODEL default:
+#                                                           FILES_DIR/../stacknet_gpu.pt)
+#
+# To ship it (docs/stacknet.md, "The GPU path"): the tb step (`dvso tune-baseline --model OUT_MODEL ...
+# --write-model models/stacknet_cpu_main.pt`, as scripts/train_stacknet.sh tb does), `dvso bench` on 2 CPU threads
+# and benchmarks/run_dvso.sh on the held-out worlds.
+set -euo pipefail
+DIR=${1:?usage: $0 FILES_DIR [OUT_MODEL]}
+OUT_MODEL=${2:-$DIR/../stacknet_gpu.pt}
+DVSO=${DVSO:-build/dvso}
+ls "$DIR"/weights_final.pt.part* > /dev/null 2>&1 || { echo "error: no weights_final.pt.part* in $DIR" >&2; exit 1; }
+WEIGHTS=$(mktemp --suffix=.pt)
+trap 'rm -f "$WEIGHTS"' EXIT
+cat $(ls "$DIR"/weights_final.pt.part* | sort) > "$WEIGHTS"
+expected=$(cat "$DIR/weights_final.pt.sha256")
+actual=$(sha256sum "$WEIGHTS" | cut -d' ' -f1)
+[[ "$expected" == "$actual" ]] || { echo "error: joined weights' sha256 $actual != $expected (sent $expected)" >&2; exit 1; }
+read -r baseline fx_over_width < <(python3 -c "
+import json, sys
+m = json.load(open(sys.argv[1]))
+print(m['baseline'], m['fx_over_width'])" "$DIR/model_metadata.json")
+"$DVSO" export --checkpoint "$WEIGHTS" --model stack --training-baseline "$baseline" \
+  --training-fx-over-width "$fx_over_width" --out "$OUT_MODEL"
+if [[ -f "$DIR/stacknet_metrics.json" ]]; then
+  python3 -c "
+import json, sys
+m = json.load(open(sys.argv[1]))
+for net in ('simplenet', 'stacknet'):
+    a = m[net]['all']
+    print(f\"{net} on the device: held-out abs rel {a['abs_rel']:.4f}, d<1.25 {a['a1']:.3f}\")" "$DIR/stacknet_metrics.json"
+fi
