@@ -5,33 +5,38 @@
 # training camera the device recorded.
 #
 #   scripts/gpu/collect_model.sh FILES_DIR [OUT_MODEL]    (env: DVSO=build/dvso; OUT_MODEL default:
-#                                                           FILES_DIR/../stacknet_gpu.pt)
+#                                                           gpu_out/stacknet_gpu.pt, ignored by git)
 #
 # To ship it (docs/stacknet.md, "The GPU path"): the tb step (`dvso tune-baseline --model OUT_MODEL ...
 # --write-model models/stacknet_cpu_main.pt`, as scripts/train_stacknet.sh tb does), `dvso bench` on 2 CPU threads
 # and benchmarks/run_dvso.sh on the held-out worlds.
 set -euo pipefail
 DIR=${1:?usage: $0 FILES_DIR [OUT_MODEL]}
-OUT_MODEL=${2:-$DIR/../stacknet_gpu.pt}
+OUT_MODEL=${2:-$(dirname "$0")/../../gpu_out/stacknet_gpu.pt}  # FILES_DIR is read-only
 DVSO=${DVSO:-build/dvso}
 ls "$DIR"/weights_final.pt.part* > /dev/null 2>&1 || { echo "error: no weights_final.pt.part* in $DIR" >&2; exit 1; }
 WEIGHTS=$(mktemp --suffix=.pt)
 trap 'rm -f "$WEIGHTS"' EXIT
 cat $(ls "$DIR"/weights_final.pt.part* | sort) > "$WEIGHTS"
-expected=$(cat "$DIR/weights_final.pt.sha256")
+[[ -f "$DIR/result.json" ]] || { echo "error: no result.json in $DIR" >&2; exit 1; }
+read -r expected baseline fx_over_width complete < <(python3 -c "
+import json, sys
+r = json.load(open(sys.argv[1]))
+print(r['weights_sha256'], r['model_metadata']['baseline'], r['model_metadata']['fx_over_width'], r['schedule_complete'])" \
+  "$DIR/result.json")
 actual=$(sha256sum "$WEIGHTS" | cut -d' ' -f1)
-[[ "$expected" == "$actual" ]] || { echo "error: joined weights' sha256 $actual != $expected (sent $expected)" >&2; exit 1; }
-read -r baseline fx_over_width < <(python3 -c "
-import json, sys
-m = json.load(open(sys.argv[1]))
-print(m['baseline'], m['fx_over_width'])" "$DIR/model_metadata.json")
-"$DVSO" export --checkpoint "$WEIGHTS" --model stack --training-baseline "$baseline" \
+[[ "$expected" == "$actual" ]] || { echo "error: joined weights' sha256 $actual != $expected (sent)" >&2; exit 1; }
+[[ $complete == True ]] || echo "warning: the device's schedule did not finish (time limit): the model is its last checkpoint" >&2
+mkdir -p "$(dirname "$OUT_MODEL")"
+# auto: StackNet when the schedule reached its StackNet stages, else SimpleNet.
+"$DVSO" export --checkpoint "$WEIGHTS" --model auto --training-baseline "$baseline" \
   --training-fx-over-width "$fx_over_width" --out "$OUT_MODEL"
-if [[ -f "$DIR/stacknet_metrics.json" ]]; then
-  python3 -c "
+python3 -c "
 import json, sys
-m = json.load(open(sys.argv[1]))
-for net in ('simplenet', 'stacknet'):
-    a = m[net]['all']
-    print(f\"{net} on the device: held-out abs rel {a['abs_rel']:.4f}, d<1.25 {a['a1']:.3f}\")" "$DIR/stacknet_metrics.json"
-fi
+m = json.load(open(sys.argv[1]))['metrics']
+if m is None:
+    print('no held-out metrics (the device evaluation failed or ran out of time: run_logs.tgz)')
+else:
+    for net in ('simplenet', 'stacknet'):
+        a = m[net]['all']
+        print(f\"{net} on the device: held-out abs rel {a['abs_rel']:.4f}, d<1.25 {a['a1']:.3f}\")" "$DIR/result.json"

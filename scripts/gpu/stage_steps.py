@@ -3,9 +3,10 @@
 
   stage_steps.py probe CONFIG OUT              two 2-epoch stages of 15 steps (one SimpleNet, one StackNet) with
                                                CONFIG's settings: the second epoch of each times a step
-  stage_steps.py scale CONFIG OUT S_SIMPLE S_STACK BUDGET
-                                               CONFIG with every stage's max_steps_per_epoch scaled by one factor so
-                                               that the schedule takes ~BUDGET seconds at the measured step times
+  stage_steps.py scale CONFIG OUT S_SIMPLE S_STACK BUDGET [EPOCH_OVERHEAD]
+                                               CONFIG with every stage's steps scaled by one factor so that the
+                                               schedule takes ~0.9 BUDGET seconds at the measured step times plus
+                                               EPOCH_OVERHEAD seconds per epoch (checkpoints, loader start)
 
 Both write `base: CONFIG` plus a `stages:` list (lists replace the base's whole). CONFIG's own `base:` chain is
 resolved as stacknet/config.cpp resolves it (maps merge key by key, anything else replaces, an empty section keeps
@@ -89,16 +90,30 @@ def main(argv):
         write(config_path, out_path, probe)
     elif mode == "scale":
         simple_s, stack_s, budget = map(float, argv[4:7])
+        epoch_overhead = float(argv[7]) if len(argv) > 7 else 0.0
         config = load_resolved(config_path)
-        planned = sum(s.get("epochs", 1) * s["max_steps_per_epoch"] *
-                      (stack_s if s.get("model", "simple") == "stack" else simple_s) for s in stages)
-        # 0.9: the epoch-end checkpoints and the curve monitor beside the training are not in the probe's times.
+        full_epochs = [batches_per_epoch(config, s) for s in stages]
+
+        def step_time(s):
+            return stack_s if s.get("model", "simple") == "stack" else simple_s
+
+        planned = sum(s.get("epochs", 1) * s["max_steps_per_epoch"] * step_time(s) for s in stages)
+        # 0.9: the curve monitor beside the training is not in the probe's times. The epochs' own overhead depends
+        # on how many epochs the scaled schedule has, which depends on the factor: a few fixed-point rounds.
         factor = 0.9 * budget / planned
-        for s in stages:
-            scale_stage(s, factor, batches_per_epoch(config, s))
+        for _ in range(20):
+            trial = [dict(s) for s in stages]
+            for s, full in zip(trial, full_epochs):
+                scale_stage(s, factor, full)
+            epochs = sum(s["epochs"] for s in trial)
+            factor = max(1e-3, (0.9 * budget - epochs * epoch_overhead) / planned)
+        for s, full in zip(stages, full_epochs):
+            scale_stage(s, factor, full)
         write(config_path, out_path, stages)
         total = sum(s["epochs"] * s["max_steps_per_epoch"] for s in stages)
-        print(f"steps scaled by {factor:.3f} to {total}")
+        seconds = sum(s["epochs"] * (s["max_steps_per_epoch"] * step_time(s) + epoch_overhead) for s in stages)
+        print(f"steps scaled by {factor:.3f} to {total} in {sum(s['epochs'] for s in stages)} epochs "
+              f"(~{seconds:.0f} s planned)")
     else:
         sys.exit(f"usage: {argv[0]} probe|scale CONFIG OUT ...")
 

@@ -21,10 +21,11 @@
 #   CONFIG=configs/stacknet_gpu.yaml          the run's config; its stage steps are scaled to the time left
 #   DATA=/tmp/dvso_stacknet_v4  WORLDS=v4     as scripts/train_stacknet.sh (the config's data paths point there)
 #   REQUIRE_CUDA=1              0 = allow a CPU LibTorch (this script's own test on a machine without a GPU)
-set -euo pipefail
+set -Eeuo pipefail  # -E: the ERR trap below also fires inside functions
 cd "$(dirname "$0")/../.."
 PHASE=${1:-all}
 START=$SECONDS
+TOTAL_SECONDS_GIVEN=${TOTAL_SECONDS:-}
 TOTAL_SECONDS=${TOTAL_SECONDS:-560}
 EVAL_RESERVE_SECONDS=${EVAL_RESERVE_SECONDS:-75}
 OUT=${OUT:-$PWD/gpu_out}
@@ -83,80 +84,126 @@ phase_prepare() {
   DVSO=$DVSO JOBS=$JOBS NICE=0 scripts/train_stacknet.sh data > "$OUT/data.log" 2>&1 ||
     { tail -20 "$OUT/data.log"; fail "data step failed (data.log)"; }
   log "rendered and labelled $(ls -d "$DATA"/w* | grep -vc '\.log$') training worlds in $((SECONDS - data_start)) s"
+  # Kept only when a step failed: $OUT may hold 8 files, and the train phase needs 6.
+  rm -f "$OUT/cmake.log" "$OUT/build.log" "$OUT/data.log"
 }
 
-# Seconds per step of a stage kind ("simple" or "stack"), measured by a short run of the config itself.
+# Prints "SIMPLE_S STACK_S EPOCH_OVERHEAD_S": seconds per SimpleNet and StackNet step, measured by a short run of the
+# config itself (the second epoch of each probe stage; the first includes start-up), and the seconds per epoch
+# outside the timed steps (checkpoint writing, loader start, stage set-up: the probe's wall time minus its timed
+# epochs, over its 4 epochs; start-up is counted in, which errs on the safe side).
 measure_step_seconds() {
   local probe=$DATA/probe
   rm -rf "$probe" && mkdir -p "$probe"
   "$PYTHON" scripts/gpu/stage_steps.py probe "$CONFIG" "$probe/config.yaml"
+  local start=$SECONDS
   "$DVSO" train --config "$probe/config.yaml" --output-dir "$probe/run" > "$probe/train.log" 2>&1 ||
     { tail -20 "$probe/train.log" >&2; fail "probe training failed"; }
-  "$PYTHON" - "$probe/run/epochs.jsonl" <<'EOF'
+  "$PYTHON" - "$probe/run/epochs.jsonl" "$((SECONDS - start))" <<'EOF'
 import json, sys
 rows = [json.loads(l) for l in open(sys.argv[1])]
 timed = {}
 for r in rows:
     if r["epoch"] == 1:  # the second epoch of each probe stage
         timed["simple" if "simple" in r["stage_name"] else "stack"] = r["seconds"] / max(1, r["timed_steps"])
-print(timed["simple"], timed["stack"])
+overhead = max(0.0, (float(sys.argv[2]) - sum(r["seconds"] for r in rows)) / len(rows))
+print(timed["simple"], timed["stack"], overhead)
 EOF
 }
 
 phase_train() {
   [[ -x "$DVSO" && -d "$DATA/heldout_all" ]] || fail "run the prepare phase first (no $DVSO or no data in $DATA)"
-  local simple_s stack_s
-  read -r simple_s stack_s < <(measure_step_seconds)
-  [[ -n "${stack_s:-}" ]] || fail "the probe training gave no step times ($DATA/probe/train.log)"
+  (( $(seconds_left) - EVAL_RESERVE_SECONDS > 90 )) ||
+    fail "only $(seconds_left) s left: call again at once with 'TOTAL_SECONDS=T $0 train' (build and data stay)"
+  local simple_s stack_s overhead_s
+  read -r simple_s stack_s overhead_s < <(measure_step_seconds) || true
+  [[ -n "${overhead_s:-}" ]] || fail "the probe training gave no step times ($DATA/probe/train.log)"
   local budget=$(( $(seconds_left) - EVAL_RESERVE_SECONDS ))
-  (( budget > 30 )) || fail "only $budget s left for training"
-  log "step time: SimpleNet $simple_s s, StackNet $stack_s s; $budget s for training"
+  (( budget > 20 )) || fail "only $budget s left for training after the probe"
+  log "step time: SimpleNet $simple_s s, StackNet $stack_s s, $overhead_s s per epoch besides; $budget s for training"
   # A fresh run folder: the export and evaluation steps of train_stacknet.sh keep what an earlier run left there.
   rm -rf "$RUN" && mkdir -p "$RUN"
   local scaled
-  scaled=$("$PYTHON" scripts/gpu/stage_steps.py scale "$CONFIG" "$RUN/config_scaled.yaml" "$simple_s" "$stack_s" "$budget")
+  scaled=$("$PYTHON" scripts/gpu/stage_steps.py scale "$CONFIG" "$RUN/config_scaled.yaml" "$simple_s" "$stack_s" \
+    "$budget" "$overhead_s")
   log "$scaled ($RUN/config_scaled.yaml)"
-  # The learning curve (held-out abs rel after every epoch) beside the training, as the CPU pipeline does.
+  # The learning curve (held-out abs rel after every epoch) beside the training, as the CPU pipeline does; in a
+  # session of its own, so that stopping it stops its exports and predictions too.
   rm -f "$RUN/train.done" "$RUN/curve.csv"
-  DVSO=$DVSO RUN=$RUN NICE=0 scripts/train_stacknet.sh monitor > "$RUN/curve_monitor.log" 2>&1 &
-  local monitor=$! train_start=$SECONDS
-  "$DVSO" train --config "$RUN/config_scaled.yaml" --output-dir "$RUN" > "$RUN/train.log" 2>&1 ||
-    { kill "$monitor" 2>/dev/null; tail -20 "$RUN/train.log"; fail "training failed"; }
+  setsid env DVSO="$DVSO" RUN="$RUN" NICE=0 scripts/train_stacknet.sh monitor > "$RUN/curve_monitor.log" 2>&1 &
+  local monitor=$! train_start=$SECONDS status=0
+  # The schedule is sized to the budget; the time limit is the guarantee. SIGINT makes `dvso train` write
+  # checkpoint_last.pt after the current step and stop.
+  timeout -k 20 -s INT "$(( $(seconds_left) - EVAL_RESERVE_SECONDS ))" \
+    "$DVSO" train --config "$RUN/config_scaled.yaml" --output-dir "$RUN" > "$RUN/train.log" 2>&1 || status=$?
   touch "$RUN/train.done"
-  # The monitor evaluates the last epochs' checkpoints; it may not hold up the rest.
-  timeout 30 tail --pid="$monitor" -f /dev/null || kill "$monitor" 2>/dev/null || true
-  log "trained in $((SECONDS - train_start)) s"
-  DVSO=$DVSO CONFIG=$RUN/config_scaled.yaml RUN=$RUN FINETUNE_CONFIG="" DOCS=$RUN/docs NICE=0 \
-    scripts/train_stacknet.sh export > "$OUT/export.log" 2>&1 || fail "export failed"
-  DVSO=$DVSO CONFIG=$RUN/config_scaled.yaml RUN=$RUN FINETUNE_CONFIG="" DOCS=$RUN/docs NICE=0 \
-    scripts/train_stacknet.sh eval > "$OUT/eval.log" 2>&1 || { tail -20 "$OUT/eval.log"; fail "evaluation failed"; }
-  if [[ $REQUIRE_CUDA == 1 ]]; then
-    log "GPU latency of the new StackNet: $("$DVSO" bench --model "$RUN/stacknet.pt" --device cuda --dtype all --runs 50 --json | tr -d '\n ')"
+  sleep 5  # the monitor may finish the last epoch's row; it may not hold up the rest
+  kill -- "-$monitor" 2>/dev/null || true
+  local ckpt=$RUN/checkpoint_final.pt complete=true
+  if [[ ! -f "$ckpt" ]]; then
+    ckpt=$RUN/checkpoint_last.pt complete=false
+    [[ -f "$ckpt" ]] || { tail -20 "$RUN/train.log" >&2; fail "training left no checkpoint (status $status)"; }
+    log "the schedule did not finish (status $status, time limit: 124): its last checkpoint is the model"
   fi
-  log "held-out StackNet: $("$PYTHON" -c "import json; m=json.load(open('$RUN/docs/stacknet_metrics.json'))['stacknet']['all']; print('abs rel %.4f d1 %.3f' % (m['abs_rel'], m['a1']))")"
-  # At most 8 files of <= 16 MiB come back. The model travels as a weights-only checkpoint in 15 MiB parts, not as
-  # this machine's TorchScript file: `dvso export` here, with Debian's LibTorch 1.13, makes the file that every
-  # other machine loads (a TorchScript file written by a newer LibTorch need not load in an older one), with the
-  # training camera this machine recorded in its export (model_metadata.json).
-  "$DVSO" export --checkpoint "$RUN/checkpoint_final.pt" --weights-only --out "$RUN/weights_final.pt" > /dev/null
+  log "trained in $((SECONDS - train_start)) s; $(tail -1 "$RUN/epochs.jsonl" | cut -c1-200)"
+
+  # What comes back (at most 8 files of <= 16 MiB), packed first so that a failure or the tool's time limit in the
+  # evaluation below cannot lose it. The model travels as a weights-only checkpoint in 15 MiB parts, not as this
+  # machine's TorchScript file: `dvso export` here, with Debian's LibTorch 1.13 (scripts/gpu/collect_model.sh),
+  # makes the file that every other machine loads (a TorchScript file written by a newer LibTorch need not load in
+  # an older one), with the training camera this machine records in its export.
+  "$DVSO" export --checkpoint "$ckpt" --weights-only --out "$RUN/weights_final.pt" > /dev/null
   split -b 15M -d "$RUN/weights_final.pt" "$OUT/weights_final.pt.part"
-  sha256sum "$RUN/weights_final.pt" | cut -d' ' -f1 > "$OUT/weights_final.pt.sha256"
-  "$PYTHON" - "$RUN/stacknet.pt" "$OUT/model_metadata.json" <<'EOF'
-import sys, zipfile
-with zipfile.ZipFile(sys.argv[1]) as z:  # a TorchScript file is a zip; extra files sit under <name>/extra/
-    name = next(n for n in z.namelist() if n.endswith("/extra/dvso_metadata.json"))
-    open(sys.argv[2], "wb").write(z.read(name))
+  "$DVSO" export --checkpoint "$ckpt" --model simple --out "$RUN/simplenet.pt" > /dev/null
+  "$DVSO" export --checkpoint "$ckpt" --model auto --out "$RUN/stacknet.pt" > /dev/null
+  write_result() {  # $OUT/result.json: checksum, training camera, whether the schedule finished, metrics if any
+    "$PYTHON" - "$RUN" "$OUT/result.json" "$(sha256sum "$RUN/weights_final.pt" | cut -d' ' -f1)" "$complete" <<'EOF'
+import json, os, sys, zipfile
+run, out, sha, complete = sys.argv[1:5]
+with zipfile.ZipFile(f"{run}/stacknet.pt") as z:  # a TorchScript file is a zip; extra files sit under <name>/extra/
+    metadata = json.loads(z.read(next(n for n in z.namelist() if n.endswith("/extra/dvso_metadata.json"))))
+metrics_path = f"{run}/docs/stacknet_metrics.json"
+metrics = json.load(open(metrics_path)) if os.path.exists(metrics_path) else None
+json.dump({"weights_sha256": sha, "schedule_complete": complete == "true", "model_metadata": metadata,
+           "metrics": metrics}, open(out, "w"), indent=1)
 EOF
-  cp "$RUN/docs/stacknet_metrics.json" "$OUT/"
-  tar -C "$RUN" -czf "$OUT/run_logs.tgz" config_scaled.yaml epochs.jsonl train.log docs \
-    $(cd "$RUN" && ls losses.csv curve.csv 2>/dev/null)
-  rm -f "$OUT/cmake.log" "$OUT/build.log" "$OUT/data.log" "$OUT/export.log" "$OUT/eval.log"  # 8 files at most
+  }
+  write_result
+  pack_logs() {
+    cp "$LOG" "$RUN/device_log.txt"
+    local files=() f
+    for f in config_scaled.yaml epochs.jsonl losses.csv train.log curve.csv curve_monitor.log eval.log docs \
+             device_log.txt; do
+      if [[ -e "$RUN/$f" ]]; then files+=("$f"); fi
+    done
+    tar -C "$RUN" -czf "$OUT/run_logs.tgz" "${files[@]}"
+  }
+  pack_logs
+  log "weights packed ($(ls "$OUT" | tr '\n' ' '))"
+
+  # Evaluation on the held-out worlds, bounded by what is left before the tool's limit; a failure here is logged.
+  local eval_limit=$(( TOTAL_SECONDS + 25 - (SECONDS - START) ))
+  if timeout "$eval_limit" env DVSO="$DVSO" CONFIG="$RUN/config_scaled.yaml" RUN="$RUN" FINETUNE_CONFIG="" \
+       DOCS="$RUN/docs" NICE=0 scripts/train_stacknet.sh eval > "$RUN/eval.log" 2>&1; then
+    log "held-out StackNet: $("$PYTHON" -c "import json; m=json.load(open('$RUN/docs/stacknet_metrics.json'))['stacknet']['all']; print('abs rel %.4f d1 %.3f' % (m['abs_rel'], m['a1']))")"
+  else
+    log "evaluation failed or ran out of time (eval.log in run_logs.tgz): $(tail -3 "$RUN/eval.log" | tr '\n' ' ')"
+  fi
+  if [[ $REQUIRE_CUDA == 1 ]] && (( $(seconds_left) > 0 )); then
+    log "GPU latency of the new StackNet: $(timeout 30 "$DVSO" bench --model "$RUN/stacknet.pt" --device cuda --dtype all --runs 50 --json | tr -d '\n ' || echo failed)"
+  fi
+  write_result
+  pack_logs
   log "done in $((SECONDS - START)) s: $(ls "$OUT" | tr '\n' ' ')"
 }
 
 case "$PHASE" in
-  all) phase_prepare; phase_train ;;
-  prepare) phase_prepare ;;
-  train) phase_train ;;
+  all) phase_prepare; log "$(seconds_left) s left"; phase_train ;;
+  prepare) phase_prepare; log "$(seconds_left) s left" ;;
+  train)
+    # A train call follows a prepare call on the same machine: its clock must be the session's, not a fresh 560 s.
+    [[ -n "${TOTAL_SECONDS_GIVEN:-}" ]] ||
+      fail "the train phase needs TOTAL_SECONDS (the device time left minus ~60 s: budget_left_s from status)"
+    phase_train ;;
   *) echo "usage: $0 [all|prepare|train]" >&2; exit 2 ;;
 esac

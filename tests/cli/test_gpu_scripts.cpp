@@ -82,6 +82,21 @@ TEST(GpuStageSteps, ScalesEveryStageByOneFactorAndGrowsEpochsWhereTheDataEnds) {
   EXPECT_EQ(a["lr_halving_start"].as<int>(), 4);
   EXPECT_EQ(a["lr_halving_every"].as<int>(), 2);
 
+  // With 10 s per epoch besides the steps (checkpoints), the same budget buys fewer steps: 7 epochs cost 70 of the
+  // 0.9 * 142 = 128 s, so the steps get ~(128 - 70) / 64 ~ 0.9x the plan (49 steps), not 2x (128).
+  ASSERT_EQ(RunStageSteps("scale " + (dir / "config.yaml").string() + " " + out + " 1 2 " +
+                          std::to_string(2 * 64 / 0.9) + " 10"),
+            0);
+  const YAML::Node with_overhead = YAML::LoadFile(out)["stages"];
+  int steps = 0, epochs = 0;
+  for (const YAML::Node& stage : with_overhead) {
+    steps += stage["epochs"].as<int>() * stage["max_steps_per_epoch"].as<int>();
+    epochs += stage["epochs"].as<int>();
+  }
+  EXPECT_LT(steps, 64);
+  EXPECT_GT(steps, 40);
+  EXPECT_LE(epochs, 7);
+
   // The probe: one SimpleNet and one StackNet stage of two 15-step epochs, with the config's settings.
   ASSERT_EQ(RunStageSteps("probe " + (dir / "config.yaml").string() + " " + out), 0);
   const YAML::Node probe = YAML::LoadFile(out)["stages"];
