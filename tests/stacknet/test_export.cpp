@@ -96,19 +96,30 @@ TEST(Export, InferenceLayoutGivesTheSameDisparities) {
   }
 }
 
-TEST(Export, CheckpointExportUsesTheTrainedNetwork) {
-  torch::manual_seed(4);
+// The config of a tiny network trained on a sequence that is not on this machine, and its checkpoint record.
+StackNetConfig TinyTrainedConfig() {
   StackNetConfig config;
   config.network = testing::TinyNetwork();
   config.data.sequences = {"unused"};
   config.stages.resize(1);
-  StackNet net(config.network);
-  const fs::path dir = fs::path(dvso::testing::ScratchPath("export_ckpt"));
-  fs::create_directories(dir);
+  return config;
+}
+
+CheckpointInfo TinyCheckpointInfo(const StackNetConfig& config) {
   CheckpointInfo info;
   info.config_yaml = ConfigToYaml(config);
   info.trained_model = "simple";
   info.config_name = "stacknet_tiny";
+  return info;
+}
+
+TEST(Export, CheckpointExportUsesTheTrainedNetwork) {
+  torch::manual_seed(4);
+  const StackNetConfig config = TinyTrainedConfig();
+  StackNet net(config.network);
+  const fs::path dir = fs::path(dvso::testing::ScratchPath("export_ckpt"));
+  fs::create_directories(dir);
+  CheckpointInfo info = TinyCheckpointInfo(config);
   SaveCheckpoint((dir / "c.pt").string(), net, nullptr, info);
   EXPECT_EQ(ReadCheckpointInfo((dir / "c.pt").string()).config_name, "stacknet_tiny");
   // The config's sequences are gone: the training camera must be given.
@@ -146,10 +157,7 @@ TEST(Export, CheckpointExportUsesTheTrainedNetwork) {
 // must export to the same network as the full checkpoint.
 TEST(Export, WeightsOnlyCheckpointExportsTheSameNetwork) {
   torch::manual_seed(5);
-  StackNetConfig config;
-  config.network = testing::TinyNetwork();
-  config.data.sequences = {"unused"};
-  config.stages.resize(1);
+  const StackNetConfig config = TinyTrainedConfig();
   StackNet net(config.network);
   torch::optim::Adam optimizer(net->parameters(), torch::optim::AdamOptions(1e-3));
   // One step, so the optimiser has state (exp_avg, exp_avg_sq per parameter: twice the weights).
@@ -158,10 +166,7 @@ TEST(Export, WeightsOnlyCheckpointExportsTheSameNetwork) {
   optimizer.step();
   const fs::path dir = fs::path(dvso::testing::ScratchPath("export_weights_only"));
   fs::create_directories(dir);
-  CheckpointInfo info;
-  info.config_yaml = ConfigToYaml(config);
-  info.trained_model = "simple";
-  info.config_name = "stacknet_tiny";
+  CheckpointInfo info = TinyCheckpointInfo(config);
   info.position.global_step = 17;
   SaveCheckpoint((dir / "full.pt").string(), net, &optimizer, info);
   WriteWeightsOnlyCheckpoint((dir / "full.pt").string(), (dir / "weights.pt").string());
