@@ -97,23 +97,34 @@ def main(argv):
         def step_time(s):
             return stack_s if s.get("model", "simple") == "stack" else simple_s
 
-        planned = sum(s.get("epochs", 1) * s["max_steps_per_epoch"] * step_time(s) for s in stages)
-        # 0.9: the curve monitor beside the training is not in the probe's times. The epochs' own overhead depends
-        # on how many epochs the scaled schedule has, which depends on the factor: a few fixed-point rounds.
-        factor = 0.9 * budget / planned
-        for _ in range(20):
+        def scaled(factor):
             trial = [dict(s) for s in stages]
             for s, full in zip(trial, full_epochs):
                 scale_stage(s, factor, full)
-            epochs = sum(s["epochs"] for s in trial)
-            factor = max(1e-3, (0.9 * budget - epochs * epoch_overhead) / planned)
-        for s, full in zip(stages, full_epochs):
-            scale_stage(s, factor, full)
+            return trial
+
+        def planned_seconds(schedule):
+            return sum(s["epochs"] * (s["max_steps_per_epoch"] * step_time(s) + epoch_overhead) for s in schedule)
+
+        # 0.9: the curve monitor beside the training is not in the probe's times. The planned time grows with the
+        # factor (apart from rounding), and once an epoch reaches its data the epoch count grows with it, each epoch
+        # with its overhead: bisect for the largest factor whose schedule fits, instead of solving for it.
+        target = 0.9 * budget
+        low, high = 0.0, 1.0
+        while planned_seconds(scaled(high)) <= target and high < 1e6:
+            low, high = high, 2 * high
+        for _ in range(60):
+            middle = (low + high) / 2
+            if planned_seconds(scaled(middle)) <= target:
+                low = middle
+            else:
+                high = middle
+        factor = max(low, 1e-6)  # at the floor every stage keeps one step of one epoch
+        stages = scaled(factor)
         write(config_path, out_path, stages)
         total = sum(s["epochs"] * s["max_steps_per_epoch"] for s in stages)
-        seconds = sum(s["epochs"] * (s["max_steps_per_epoch"] * step_time(s) + epoch_overhead) for s in stages)
         print(f"steps scaled by {factor:.3f} to {total} in {sum(s['epochs'] for s in stages)} epochs "
-              f"(~{seconds:.0f} s planned)")
+              f"(~{planned_seconds(stages):.0f} s planned of {budget:.0f} s)")
     else:
         sys.exit(f"usage: {argv[0]} probe|scale CONFIG OUT ...")
 

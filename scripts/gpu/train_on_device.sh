@@ -36,6 +36,8 @@ PYTHON=${PYTHON:-python3}
 CONFIG=${CONFIG:-configs/stacknet_gpu.yaml}
 export DATA=${DATA:-/tmp/dvso_stacknet_v4} WORLDS=${WORLDS:-v4}
 REQUIRE_CUDA=${REQUIRE_CUDA:-1}
+# The device tool stops a command at 600 s; the evaluation may run until TOTAL_SECONDS + 25 s, plus 5 s to be killed.
+(( TOTAL_SECONDS <= 560 )) || { echo "error: TOTAL_SECONDS must be <= 560 (the device tool's 600 s limit)" >&2; exit 1; }
 RUN=$DATA/run_gpu
 DVSO=$BUILD_DIR/dvso
 mkdir -p "$OUT"
@@ -90,24 +92,33 @@ phase_prepare() {
 
 # Prints "SIMPLE_S STACK_S EPOCH_OVERHEAD_S": seconds per SimpleNet and StackNet step, measured by a short run of the
 # config itself (the second epoch of each probe stage; the first includes start-up), and the seconds per epoch
-# outside the timed steps (checkpoint writing, loader start, stage set-up: the probe's wall time minus its timed
-# epochs, over its 4 epochs; start-up is counted in, which errs on the safe side).
+# outside its timed steps (checkpoint writing, loader start): the wall time between the records of a stage's two
+# epochs, which appear in epochs.jsonl as they end, minus the second epoch's timed seconds.
 measure_step_seconds() {
   local probe=$DATA/probe
-  rm -rf "$probe" && mkdir -p "$probe"
+  rm -rf "$probe" && mkdir -p "$probe/run"
   "$PYTHON" scripts/gpu/stage_steps.py probe "$CONFIG" "$probe/config.yaml"
-  local start=$SECONDS
-  "$DVSO" train --config "$probe/config.yaml" --output-dir "$probe/run" > "$probe/train.log" 2>&1 ||
-    { tail -20 "$probe/train.log" >&2; fail "probe training failed"; }
-  "$PYTHON" - "$probe/run/epochs.jsonl" "$((SECONDS - start))" <<'EOF'
+  "$DVSO" train --config "$probe/config.yaml" --output-dir "$probe/run" > "$probe/train.log" 2>&1 &
+  local pid=$! seen=0 lines times=()
+  while kill -0 "$pid" 2> /dev/null; do
+    lines=0
+    if [[ -f "$probe/run/epochs.jsonl" ]]; then lines=$(wc -l < "$probe/run/epochs.jsonl"); fi
+    while (( seen < lines )); do times+=("$EPOCHREALTIME"); seen=$((seen + 1)); done
+    sleep 0.05
+  done
+  wait "$pid" || { tail -20 "$probe/train.log" >&2; fail "probe training failed"; }
+  "$PYTHON" - "$probe/run/epochs.jsonl" "${times[@]}" <<'EOF'
 import json, sys
 rows = [json.loads(l) for l in open(sys.argv[1])]
-timed = {}
-for r in rows:
+seen = [float(t) for t in sys.argv[2:]]  # when each record appeared, for the records seen while the run was on
+timed, overheads = {}, []
+for i, r in enumerate(rows):
     if r["epoch"] == 1:  # the second epoch of each probe stage
         timed["simple" if "simple" in r["stage_name"] else "stack"] = r["seconds"] / max(1, r["timed_steps"])
-overhead = max(0.0, (float(sys.argv[2]) - sum(r["seconds"] for r in rows)) / len(rows))
-print(timed["simple"], timed["stack"], overhead)
+        if i < len(seen):
+            overheads.append(max(0.0, seen[i] - seen[i - 1] - r["seconds"]))
+# No record seen in time (a probe faster than the polling): one second per epoch, a checkpoint's order of magnitude.
+print(timed["simple"], timed["stack"], max(overheads) if overheads else 1.0)
 EOF
 }
 
@@ -137,8 +148,13 @@ phase_train() {
   timeout -k 20 -s INT "$(( $(seconds_left) - EVAL_RESERVE_SECONDS ))" \
     "$DVSO" train --config "$RUN/config_scaled.yaml" --output-dir "$RUN" > "$RUN/train.log" 2>&1 || status=$?
   touch "$RUN/train.done"
-  sleep 5  # the monitor may finish the last epoch's row; it may not hold up the rest
+  sleep 5  # a few seconds for a curve row the monitor is writing; it may not hold up the rest
   kill -- "-$monitor" 2>/dev/null || true
+  # The monitor polls every 30 s and may be stopped mid-work: drop a row it did not finish (the curve figure
+  # refuses one).
+  if [[ -s "$RUN/curve.csv" && $(tail -c 1 "$RUN/curve.csv" | od -An -c | tr -d ' ') != '\n' ]]; then
+    sed -i '$d' "$RUN/curve.csv"
+  fi
   local ckpt=$RUN/checkpoint_final.pt complete=true
   if [[ ! -f "$ckpt" ]]; then
     ckpt=$RUN/checkpoint_last.pt complete=false
@@ -154,7 +170,7 @@ phase_train() {
   # an older one), with the training camera this machine records in its export.
   "$DVSO" export --checkpoint "$ckpt" --weights-only --out "$RUN/weights_final.pt" > /dev/null
   split -b 15M -d "$RUN/weights_final.pt" "$OUT/weights_final.pt.part"
-  "$DVSO" export --checkpoint "$ckpt" --model simple --out "$RUN/simplenet.pt" > /dev/null
+  # auto: StackNet when the schedule reached its StackNet stages, else SimpleNet (result.json's model_kind).
   "$DVSO" export --checkpoint "$ckpt" --model auto --out "$RUN/stacknet.pt" > /dev/null
   write_result() {  # $OUT/result.json: checksum, training camera, whether the schedule finished, metrics if any
     "$PYTHON" - "$RUN" "$OUT/result.json" "$(sha256sum "$RUN/weights_final.pt" | cut -d' ' -f1)" "$complete" <<'EOF'
@@ -180,20 +196,22 @@ EOF
   }
   pack_logs
   log "weights packed ($(ls "$OUT" | tr '\n' ' '))"
+  "$DVSO" export --checkpoint "$ckpt" --model simple --out "$RUN/simplenet.pt" > /dev/null ||
+    log "SimpleNet export failed"
 
   # Evaluation on the held-out worlds, bounded by what is left before the tool's limit; a failure here is logged.
   local eval_limit=$(( TOTAL_SECONDS + 25 - (SECONDS - START) ))
-  if timeout "$eval_limit" env DVSO="$DVSO" CONFIG="$RUN/config_scaled.yaml" RUN="$RUN" FINETUNE_CONFIG="" \
+  if (( eval_limit > 10 )) && timeout -k 5 "$eval_limit" env DVSO="$DVSO" CONFIG="$RUN/config_scaled.yaml" RUN="$RUN" FINETUNE_CONFIG="" \
        DOCS="$RUN/docs" NICE=0 scripts/train_stacknet.sh eval > "$RUN/eval.log" 2>&1; then
-    log "held-out StackNet: $("$PYTHON" -c "import json; m=json.load(open('$RUN/docs/stacknet_metrics.json'))['stacknet']['all']; print('abs rel %.4f d1 %.3f' % (m['abs_rel'], m['a1']))")"
+    log "held-out, model as trained ($(cd "$RUN" && "$PYTHON" -c "import json; m=json.load(open('docs/stacknet_metrics.json'))['stacknet']['all']; print('abs rel %.4f d1 %.3f' % (m['abs_rel'], m['a1']))"))"
   else
     log "evaluation failed or ran out of time (eval.log in run_logs.tgz): $(tail -3 "$RUN/eval.log" | tr '\n' ' ')"
   fi
   if [[ $REQUIRE_CUDA == 1 ]] && (( $(seconds_left) > 0 )); then
     log "GPU latency of the new StackNet: $(timeout 30 "$DVSO" bench --model "$RUN/stacknet.pt" --device cuda --dtype all --runs 50 --json | tr -d '\n ' || echo failed)"
   fi
-  write_result
-  pack_logs
+  write_result || log "result.json not updated"
+  pack_logs || log "run_logs.tgz not updated"
   log "done in $((SECONDS - START)) s: $(ls "$OUT" | tr '\n' ' ')"
 }
 

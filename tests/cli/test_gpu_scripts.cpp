@@ -55,9 +55,10 @@ TEST(GpuStageSteps, ScalesEveryStageByOneFactorAndGrowsEpochsWhereTheDataEnds) {
                                    << "  - {name: c, model: stack, epochs: 1, max_steps_per_epoch: 10}\n";
   std::ofstream(dir / "config.yaml") << "base: base.yaml\ntrain: {seed: 3}\n";
   const std::string out = (dir / "scaled.yaml").string();
-  // Planned time at 1 s per SimpleNet and 2 s per StackNet step: 40 + 4 + 2 * 10 = 64 s. The factor is
-  // 0.9 * budget / planned (0.9: what the probe does not time), so a budget of 2 * 64 / 0.9 s doubles every stage.
-  ASSERT_EQ(RunStageSteps("scale " + (dir / "config.yaml").string() + " " + out + " 1 2 " + std::to_string(2 * 64 / 0.9)), 0);
+  // Planned time at 1 s per SimpleNet and 2 s per StackNet step: 40 + 4 + 2 * 10 = 64 s. The scaler takes the
+  // largest factor whose schedule fits 0.9 * budget (0.9: what the probe does not time), so a budget of
+  // 2 * 64 / 0.9 s (+ 1 s, less than any step more would cost) doubles every stage.
+  ASSERT_EQ(RunStageSteps("scale " + (dir / "config.yaml").string() + " " + out + " 1 2 " + std::to_string(2 * 64 / 0.9 + 1)), 0);
   const YAML::Node scaled = YAML::LoadFile(out);
   EXPECT_EQ(scaled["base"].as<std::string>(), fs::absolute(dir / "config.yaml").string());
   const YAML::Node stages = scaled["stages"];
@@ -75,7 +76,7 @@ TEST(GpuStageSteps, ScalesEveryStageByOneFactorAndGrowsEpochsWhereTheDataEnds) {
 
   // Four times the steps: a's epochs cannot grow past 20 steps, so it gets 8 epochs, and its halving epochs move
   // with them (from the 3rd of 4 epochs, every epoch, to the 5th of 8, every 2nd).
-  ASSERT_EQ(RunStageSteps("scale " + (dir / "config.yaml").string() + " " + out + " 1 2 " + std::to_string(4 * 64 / 0.9)), 0);
+  ASSERT_EQ(RunStageSteps("scale " + (dir / "config.yaml").string() + " " + out + " 1 2 " + std::to_string(4 * 64 / 0.9 + 1)), 0);
   const YAML::Node a = Stage(YAML::LoadFile(out)["stages"], "a");
   EXPECT_EQ(a["max_steps_per_epoch"].as<int>(), 20);
   EXPECT_EQ(a["epochs"].as<int>(), 8);
@@ -85,7 +86,7 @@ TEST(GpuStageSteps, ScalesEveryStageByOneFactorAndGrowsEpochsWhereTheDataEnds) {
   // With 10 s per epoch besides the steps (checkpoints), the same budget buys fewer steps: 7 epochs cost 70 of the
   // 0.9 * 142 = 128 s, so the steps get ~(128 - 70) / 64 ~ 0.9x the plan (49 steps), not 2x (128).
   ASSERT_EQ(RunStageSteps("scale " + (dir / "config.yaml").string() + " " + out + " 1 2 " +
-                          std::to_string(2 * 64 / 0.9) + " 10"),
+                          std::to_string(2 * 64 / 0.9 + 1) + " 10"),
             0);
   const YAML::Node with_overhead = YAML::LoadFile(out)["stages"];
   int steps = 0, epochs = 0;
