@@ -71,7 +71,6 @@ void RequireMapsOfCameraPair(const std::string& maps_dir, CameraPair pair) {
 PredictionSource OpenPredictionSource(const PredictionSourceArgs& args, const SequenceReader& sequence) {
   args.Check();
   PredictionSource out;
-  const PinholeCamera& cam = sequence.camera().left;
   std::ostringstream description;
   if (!args.disparity_left.empty()) {
     std::vector<std::string> names;
