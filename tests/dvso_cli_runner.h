@@ -1,5 +1,5 @@
 // Shared by the end-to-end test suites: runs the built `dvso` binary
-// (DVSO_BINARY, defined for every test target) and captures its output.
+// (DVSO_BINARY, defined for every test target), or a project script, and captures its output.
 #pragma once
 
 #include <sys/wait.h>
@@ -21,10 +21,9 @@ struct CliRun {
   std::string out;     // stdout, plus stderr when merged
 };
 
-// Runs `dvso ARGS`; stderr goes into `out` when merge_stderr, else is discarded.
-inline CliRun RunDvso(const std::string& args, bool merge_stderr = true) {
-  const std::string command =
-      std::string(DVSO_BINARY) + " " + args + (merge_stderr ? " 2>&1" : " 2>/dev/null");
+// Runs a shell command line; stderr goes into `out` when merge_stderr, else is discarded.
+inline CliRun RunCommand(const std::string& command_line, bool merge_stderr = true) {
+  const std::string command = command_line + (merge_stderr ? " 2>&1" : " 2>/dev/null");
   CliRun run;
   FILE* pipe = ::popen(command.c_str(), "r");
   if (pipe == nullptr) return run;
@@ -33,6 +32,11 @@ inline CliRun RunDvso(const std::string& args, bool merge_stderr = true) {
   const int status = ::pclose(pipe);
   run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return run;
+}
+
+// Runs `dvso ARGS`; stderr goes into `out` when merge_stderr, else is discarded.
+inline CliRun RunDvso(const std::string& args, bool merge_stderr = true) {
+  return RunCommand(std::string(DVSO_BINARY) + " " + args, merge_stderr);
 }
 
 // Makes a fresh folder `name`_PID under the test temp dir and simulates `frames`

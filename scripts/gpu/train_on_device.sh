@@ -49,7 +49,9 @@ trap 'log "error: \"$BASH_COMMAND\" failed (line $LINENO)"' ERR
 seconds_left() { echo $((TOTAL_SECONDS - (SECONDS - START))); }
 
 phase_prepare() {
-  log "machine: $(nproc) cores, $(free -g | awk '/Mem:/ {print $2}') GB; $(nvidia-smi --query-gpu=name,memory.total --format=csv,noheader 2>/dev/null || echo 'no nvidia-smi')"
+  local gpu
+  gpu=$(nvidia-smi --query-gpu=name,memory.total --format=csv,noheader 2>/dev/null || echo 'no nvidia-smi')
+  log "machine: $(nproc) cores, $(free -g | awk '/Mem:/ {print $2}') GB; $gpu"
   [[ -f "$BUNDLE" ]] || fail "no $BUNDLE: run scripts/gpu/make_bundle.sh here first and carry .gpu_bundle"
   tar -C / -xJf "$BUNDLE"
   local prefix
@@ -67,7 +69,8 @@ phase_prepare() {
   # CMAKE_FIND_PACKAGE_PREFER_CONFIG + the bundle first: its static OpenCV and yaml-cpp, not a system copy.
   cmake -S . -B "$BUILD_DIR" -G Ninja -DCMAKE_BUILD_TYPE=Release -DDVSO_WITH_TORCH=ON -DDVSO_BUILD_TESTS=OFF \
     -DDVSO_BUILD_BENCHMARKS=OFF -DCMAKE_PREFIX_PATH="$prefix${TORCH_CMAKE:+;$TORCH_CMAKE}" \
-    -DCMAKE_FIND_PACKAGE_PREFER_CONFIG=ON "${cuda_hint[@]}" > "$OUT/cmake.log" 2>&1 || { tail -30 "$OUT/cmake.log"; fail "configure failed"; }
+    -DCMAKE_FIND_PACKAGE_PREFER_CONFIG=ON "${cuda_hint[@]}" > "$OUT/cmake.log" 2>&1 ||
+    { tail -30 "$OUT/cmake.log"; fail "configure failed"; }
   local build_start=$SECONDS
   cmake --build "$BUILD_DIR" -j "$JOBS" --target dvso stacknet_figures > "$OUT/build.log" 2>&1 ||
     { grep -m 20 -A 5 "error" "$OUT/build.log"; fail "build failed (build.log)"; }
@@ -201,14 +204,20 @@ EOF
 
   # Evaluation on the held-out worlds, bounded by what is left before the tool's limit; a failure here is logged.
   local eval_limit=$(( TOTAL_SECONDS + 25 - (SECONDS - START) ))
-  if (( eval_limit > 10 )) && timeout -k 5 "$eval_limit" env DVSO="$DVSO" CONFIG="$RUN/config_scaled.yaml" RUN="$RUN" FINETUNE_CONFIG="" \
-       DOCS="$RUN/docs" NICE=0 scripts/train_stacknet.sh eval > "$RUN/eval.log" 2>&1; then
-    log "held-out, model as trained ($(cd "$RUN" && "$PYTHON" -c "import json; m=json.load(open('docs/stacknet_metrics.json'))['stacknet']['all']; print('abs rel %.4f d1 %.3f' % (m['abs_rel'], m['a1']))"))"
+  if (( eval_limit > 10 )) && timeout -k 5 "$eval_limit" env DVSO="$DVSO" CONFIG="$RUN/config_scaled.yaml" \
+       RUN="$RUN" FINETUNE_CONFIG="" DOCS="$RUN/docs" NICE=0 scripts/train_stacknet.sh eval > "$RUN/eval.log" 2>&1; then
+    local heldout
+    heldout=$(cd "$RUN" && "$PYTHON" -c "import json; m = json.load(open('docs/stacknet_metrics.json'))['stacknet']['all']
+print('abs rel %.4f d1 %.3f' % (m['abs_rel'], m['a1']))")
+    log "held-out, model as trained ($heldout)"
   else
     log "evaluation failed or ran out of time (eval.log in run_logs.tgz): $(tail -3 "$RUN/eval.log" | tr '\n' ' ')"
   fi
   if [[ $REQUIRE_CUDA == 1 ]] && (( $(seconds_left) > 0 )); then
-    log "GPU latency of the new StackNet: $(timeout 30 "$DVSO" bench --model "$RUN/stacknet.pt" --device cuda --dtype all --runs 50 --json | tr -d '\n ' || echo failed)"
+    local latency
+    latency=$(timeout 30 "$DVSO" bench --model "$RUN/stacknet.pt" --device cuda --dtype all --runs 50 --json |
+      tr -d '\n ' || echo failed)
+    log "GPU latency of the new StackNet: $latency"
   fi
   write_result || log "result.json not updated"
   pack_logs || log "run_logs.tgz not updated"

@@ -4,11 +4,11 @@
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
 
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <string>
 
+#include "tests/dvso_cli_runner.h"
 #include "tests/temp_dir.h"
 
 namespace fs = std::filesystem;
@@ -24,10 +24,8 @@ std::string FakeSequence(const fs::path& dir, int frames) {
   return dir.string();
 }
 
-int RunStageSteps(const std::string& args) {
-  const std::string command = "python3 " + kStageSteps + " " + args + " > /dev/null 2>&1";
-  const int status = std::system(command.c_str());
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+dvso::testing::CliRun RunStageSteps(const std::string& args) {
+  return dvso::testing::RunCommand("python3 " + kStageSteps + " " + args);
 }
 
 YAML::Node Stage(const YAML::Node& stages, const std::string& name) {
@@ -55,10 +53,17 @@ TEST(GpuStageSteps, ScalesEveryStageByOneFactorAndGrowsEpochsWhereTheDataEnds) {
                                    << "  - {name: c, model: stack, epochs: 1, max_steps_per_epoch: 10}\n";
   std::ofstream(dir / "config.yaml") << "base: base.yaml\ntrain: {seed: 3}\n";
   const std::string out = (dir / "scaled.yaml").string();
+  // `stage_steps.py scale` of config.yaml at 1 s per SimpleNet and 2 s per StackNet step.
+  auto scale = [&](double budget, const std::string& epoch_overhead = "") {
+    const auto run = RunStageSteps("scale " + (dir / "config.yaml").string() + " " + out + " 1 2 " +
+                                   std::to_string(budget) + " " + epoch_overhead);
+    EXPECT_EQ(run.exit_code, 0) << run.out;
+    return run.exit_code;
+  };
   // Planned time at 1 s per SimpleNet and 2 s per StackNet step: 40 + 4 + 2 * 10 = 64 s. The scaler takes the
   // largest factor whose schedule fits 0.9 * budget (0.9: what the probe does not time), so a budget of
   // 2 * 64 / 0.9 s (+ 1 s, less than any step more would cost) doubles every stage.
-  ASSERT_EQ(RunStageSteps("scale " + (dir / "config.yaml").string() + " " + out + " 1 2 " + std::to_string(2 * 64 / 0.9 + 1)), 0);
+  ASSERT_EQ(scale(2 * 64 / 0.9 + 1), 0);
   const YAML::Node scaled = YAML::LoadFile(out);
   EXPECT_EQ(scaled["base"].as<std::string>(), fs::absolute(dir / "config.yaml").string());
   const YAML::Node stages = scaled["stages"];
@@ -76,7 +81,7 @@ TEST(GpuStageSteps, ScalesEveryStageByOneFactorAndGrowsEpochsWhereTheDataEnds) {
 
   // Four times the steps: a's epochs cannot grow past 20 steps, so it gets 8 epochs, and its halving epochs move
   // with them (from the 3rd of 4 epochs, every epoch, to the 5th of 8, every 2nd).
-  ASSERT_EQ(RunStageSteps("scale " + (dir / "config.yaml").string() + " " + out + " 1 2 " + std::to_string(4 * 64 / 0.9 + 1)), 0);
+  ASSERT_EQ(scale(4 * 64 / 0.9 + 1), 0);
   const YAML::Node a = Stage(YAML::LoadFile(out)["stages"], "a");
   EXPECT_EQ(a["max_steps_per_epoch"].as<int>(), 20);
   EXPECT_EQ(a["epochs"].as<int>(), 8);
@@ -85,9 +90,7 @@ TEST(GpuStageSteps, ScalesEveryStageByOneFactorAndGrowsEpochsWhereTheDataEnds) {
 
   // With 10 s per epoch besides the steps (checkpoints), the same budget buys fewer steps: 7 epochs cost 70 of the
   // 0.9 * 142 = 128 s, so the steps get ~(128 - 70) / 64 ~ 0.9x the plan (49 steps), not 2x (128).
-  ASSERT_EQ(RunStageSteps("scale " + (dir / "config.yaml").string() + " " + out + " 1 2 " +
-                          std::to_string(2 * 64 / 0.9 + 1) + " 10"),
-            0);
+  ASSERT_EQ(scale(2 * 64 / 0.9 + 1, "10"), 0);
   const YAML::Node with_overhead = YAML::LoadFile(out)["stages"];
   int steps = 0, epochs = 0;
   for (const YAML::Node& stage : with_overhead) {
@@ -99,7 +102,8 @@ TEST(GpuStageSteps, ScalesEveryStageByOneFactorAndGrowsEpochsWhereTheDataEnds) {
   EXPECT_LE(epochs, 7);
 
   // The probe: one SimpleNet and one StackNet stage of two 15-step epochs, with the config's settings.
-  ASSERT_EQ(RunStageSteps("probe " + (dir / "config.yaml").string() + " " + out), 0);
+  const auto probe_run = RunStageSteps("probe " + (dir / "config.yaml").string() + " " + out);
+  ASSERT_EQ(probe_run.exit_code, 0) << probe_run.out;
   const YAML::Node probe = YAML::LoadFile(out)["stages"];
   ASSERT_EQ(probe.size(), 2u);
   EXPECT_EQ(probe[0]["model"].as<std::string>(), "simple");
@@ -110,5 +114,7 @@ TEST(GpuStageSteps, ScalesEveryStageByOneFactorAndGrowsEpochsWhereTheDataEnds) {
 
   // Sequences that are not rendered yet: an error, not a schedule of one-step epochs.
   fs::remove_all(dir / "small");
-  EXPECT_NE(RunStageSteps("scale " + (dir / "config.yaml").string() + " " + out + " 1 2 100"), 0);
+  const auto refused = RunStageSteps("scale " + (dir / "config.yaml").string() + " " + out + " 1 2 100");
+  EXPECT_NE(refused.exit_code, 0);
+  EXPECT_NE(refused.out.find("no images"), std::string::npos) << refused.out;
 }
