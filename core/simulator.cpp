@@ -29,6 +29,8 @@ void SimulatorOptions::Check() const {
   Require(exposure_sigma >= 0 && exposure_sigma < 1, "exposure sigma must be in [0, 1)");
   Require(exposure_max >= 0 && exposure_max < 2, "exposure bound must be in [0, 2)");
   Require(bias_sigma >= 0 && bias_sigma < 20, "bias sigma must be in [0, 20) grey levels");
+  Require(right_gain >= 0.5 && right_gain <= 2, "right gain must be in [0.5, 2]");
+  Require(std::abs(right_bias) <= 40, "right bias must be in [-40, 40] grey levels");
   Require(vignetting_strength >= 0 && vignetting_strength < 1, "vignetting strength must be in [0, 1)");
   Require(noise_sigma >= 0 && noise_sigma < 50, "noise sigma must be in [0, 50) grey levels");
   Require(num_threads >= 1 && num_threads <= 64, "threads must be in [1, 64]");
@@ -122,6 +124,10 @@ sim::Photometric StreetSimulator::Exposure(int i, int view) const {
   // Overall exposure 0.85 leaves head room for bright facades and sky.
   p.gain = options_.exposure_level * std::exp(log_gain_[i]);
   p.bias = bias_[i];
+  if (view == 1) {
+    p.gain *= options_.right_gain;
+    p.bias += options_.right_bias;
+  }
   p.vignetting_strength = options_.vignetting ? options_.vignetting_strength : 0.0;
   p.noise_sigma = options_.noise ? options_.noise_sigma : 0.0;
   p.noise_seed = (options_.seed * 0x9E3779B97F4A7C15ull) ^ (static_cast<uint64_t>(i) * 2 + view + 1) * 0xD1B54A32D192ED03ull;

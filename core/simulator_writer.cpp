@@ -61,6 +61,7 @@ void WriteSimulationYaml(const std::string& path, const StreetSimulator& simulat
         << "\nmax_distance: " << o.max_distance << "\n";
     out << "exposure_drift: " << (o.exposure_drift ? "true" : "false") << "\nexposure_sigma: " << o.exposure_sigma
         << "\nexposure_max: " << o.exposure_max << "\nbias_sigma: " << o.bias_sigma << "\n";
+    out << "right_gain: " << o.right_gain << "\nright_bias: " << o.right_bias << "\n";
     out << "vignetting: " << (o.vignetting ? "true" : "false") << "\nvignetting_strength: " << o.vignetting_strength
         << "\n";
     out << "noise: " << (o.noise ? "true" : "false") << "\nnoise_sigma: " << o.noise_sigma << "\n";

@@ -149,6 +149,10 @@ void AddSimulateCommand(CLI::App& app) {
   cmd->add_option("--camera-height", o.camera_height, "camera height above the road (m)")->capture_default_str();
   cmd->add_flag("--no-exposure-drift", args->no_exposure, "constant exposure (no per-frame gain/bias drift)");
   cmd->add_option("--exposure-sigma", o.exposure_sigma, "per-frame log-gain random-walk std")->capture_default_str();
+  cmd->add_option("--right-gain", o.right_gain, "gain of the right camera relative to the left (0.5..2)")
+      ->capture_default_str();
+  cmd->add_option("--right-bias", o.right_bias, "extra brightness offset of the right camera (grey levels)")
+      ->capture_default_str();
   cmd->add_flag("--no-vignetting", args->no_vignetting, "no vignetting");
   cmd->add_option("--vignetting", o.vignetting_strength, "vignetting fall-off at the corners (0..1)")
       ->capture_default_str();

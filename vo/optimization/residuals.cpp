@@ -128,8 +128,12 @@ ResidualGeometry StaticStereoGeometry(const Keyframe& host, const StereoCamera& 
   // Right camera at +B along x: X_right = X_left - (B, 0, 0).
   g.t = Eigen::Vector3f(-static_cast<float>(camera.baseline), 0.0f, 0.0f);
   g.t_fej = g.t;
-  // The right image shares the host's affine brightness: e^{a-a} = 1, b cancels.
-  g.affine_scale = 1.0f;
+  // The right image relates to its own left image by the pair's transfer
+  // I_right ~ gain * I_left + bias (vo/frame/stereo_brightness.h), not by the
+  // keyframes' a, b: r = (I_right(p') - bias) - gain * I_left(p).
+  g.affine_scale = static_cast<float>(host.right_brightness.gain);
+  g.b_host = 0.0f;
+  g.b_target = static_cast<float>(host.right_brightness.bias);
   g.term_weight = ResidualTermWeight(ResidualKind::kStaticStereo, options);
   g.target = &host.right->level(0);
   g.has_frame_jacobians = false;

@@ -72,6 +72,11 @@ static void CheckDisparityMap(const cv::Mat& map, const PyramidLevel& level) {
           "window: D^R size differs from the keyframe image size");
 }
 
+static void CheckBrightnessTransfer(const StereoBrightness& transfer) {
+  Require(std::isfinite(transfer.gain) && transfer.gain > 0 && std::isfinite(transfer.bias),
+          "window: the right image's brightness transfer is not finite with a positive gain");
+}
+
 void Window::AddKeyframe(const KeyframeInput& input) {
   Require(input.left != nullptr, "window: keyframe " + std::to_string(input.id) + " has no image pyramid");
   Require(FindKeyframe(input.id) == nullptr, "window: keyframe id " + std::to_string(input.id) + " already exists");
@@ -96,6 +101,8 @@ void Window::AddKeyframe(const KeyframeInput& input) {
   kf.b_fej = input.b;
   kf.left = input.left;
   kf.right = input.right;
+  CheckBrightnessTransfer(input.right_brightness);
+  kf.right_brightness = input.right_brightness;
   kf.right_disparity = input.right_disparity;
   kf.prior_pose = input.world_to_camera;
   kf.prior_weight(6) = options_.affine_a_prior;
@@ -123,6 +130,13 @@ void Window::AddKeyframe(const KeyframeInput& input) {
   }
   prior_H_ = std::move(H);
   prior_b_ = std::move(b);
+}
+
+void Window::SetRightBrightness(int keyframe_id, const StereoBrightness& transfer) {
+  Keyframe* kf = FindMutableKeyframe(keyframe_id);
+  Require(kf != nullptr, "window: no keyframe with id " + std::to_string(keyframe_id));
+  CheckBrightnessTransfer(transfer);
+  kf->right_brightness = transfer;
 }
 
 void Window::SetRightDisparity(int keyframe_id, const cv::Mat& right_disparity) {

@@ -31,6 +31,7 @@
 
 #include "core/camera.h"
 #include "vo/frame/image_pyramid.h"
+#include "vo/frame/stereo_brightness.h"
 #include "vo/optimization/residual_pattern.h"
 
 namespace dvso::vo {
@@ -72,6 +73,7 @@ struct KeyframeInput {
   double b = 0.0;                       // affine brightness offset b
   ImagePyramidPtr left;                 // required
   ImagePyramidPtr right;                // optional: enables static stereo residuals
+  StereoBrightness right_brightness;    // I_right ~ gain * I_left + bias (vo/frame/stereo_brightness.h)
   cv::Mat right_disparity;              // optional CV_32F D^R: enables virtual stereo residuals
 };
 
@@ -135,6 +137,7 @@ struct Keyframe {
   Eigen::Matrix<double, 8, 1> prior_weight = Eigen::Matrix<double, 8, 1>::Zero();
   Eigen::Isometry3d prior_pose = Eigen::Isometry3d::Identity();
   ImagePyramidPtr left, right;
+  StereoBrightness right_brightness;    // I_right ~ gain * I_left + bias (from KeyframeInput)
   cv::Mat right_disparity;
   std::vector<Point> points;            // active points hosted here
   int num_points_added = 0;             // points ever activated here (for the DSO marginalisation rule)
@@ -174,6 +177,8 @@ class Window {
   void AddKeyframe(const KeyframeInput& input);
   // Attaches/replaces D^R of a keyframe (e.g. when the network result arrives later).
   void SetRightDisparity(int keyframe_id, const cv::Mat& right_disparity);
+  // The right image's brightness transfer of a keyframe (refitted after its static stereo matching).
+  void SetRightBrightness(int keyframe_id, const StereoBrightness& transfer);
 
   // Activates a point hosted in keyframe `host_id` at pixel (u, v) with the
   // given inverse depth: temporal residuals to all other keyframes, plus the

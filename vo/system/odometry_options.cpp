@@ -60,6 +60,7 @@ void OdometryOptions::Check() const {
   Require(min_activation_distance >= 1, "min_activation_distance must be >= 1");
   Require(max_consecutive_lost >= 1, "max_consecutive_lost must be >= 1");
   pyramid.Check();
+  stereo_brightness.Check();
   selector.Check();
   tracker.Check();
   immature.Check();

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "vo/frame/image_pyramid.h"
+#include "vo/frame/stereo_brightness.h"
 #include "vo/frontend/coarse_tracker.h"
 #include "vo/frontend/immature_point.h"
 #include "vo/frontend/keyframe_decision.h"
@@ -72,6 +73,7 @@ struct OdometryOptions {
   std::string vignette_file;          // optional vignette PNG, empty = none
 
   ImagePyramidOptions pyramid;
+  StereoBrightnessOptions stereo_brightness;  // the right camera's brightness transfer (stereo mode)
   PixelSelectorOptions selector;      // candidate (immature) points per keyframe (DSO desiredImmatureDensity 1500)
   CoarseTrackerOptions tracker;
   ImmaturePointOptions immature;

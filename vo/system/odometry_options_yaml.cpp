@@ -36,6 +36,15 @@ void VisitFields(Options& o, Visitor&& v) {
   v("pyramid", "min_top_level_pixels", o.pyramid.min_top_level_pixels);
   v("pyramid", "min_level_side", o.pyramid.min_level_side);
 
+  v("stereo_brightness", "estimate", o.stereo_brightness.estimate);
+  v("stereo_brightness", "sample_step", o.stereo_brightness.sample_step);
+  v("stereo_brightness", "border_fraction", o.stereo_brightness.border_fraction);
+  v("stereo_brightness", "min_quantile", o.stereo_brightness.min_quantile);
+  v("stereo_brightness", "max_quantile", o.stereo_brightness.max_quantile);
+  v("stereo_brightness", "num_quantiles", o.stereo_brightness.num_quantiles);
+  v("stereo_brightness", "huber_threshold", o.stereo_brightness.huber_threshold);
+  v("stereo_brightness", "max_gain_ratio", o.stereo_brightness.max_gain_ratio);
+
   v("selector", "desired_points", o.selector.desired_points);
   v("selector", "region_size", o.selector.region_size);
   v("selector", "min_grad_hist_cut", o.selector.min_grad_hist_cut);

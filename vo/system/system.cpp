@@ -238,7 +238,7 @@ void System::AttachPendingPrediction(bool wait, const TraceTarget* late_trace) {
   const Keyframe* keyframe = window_ ? window_->FindKeyframe(id) : nullptr;
   if (keyframe == nullptr) return;  // already marginalised: nothing to attach to
   window_->SetRightDisparity(id, prediction.right);
-  AddCandidates(id, *keyframe->left, nullptr, &prediction, /*converged=*/false);
+  AddCandidates(id, *keyframe->left, nullptr, StereoBrightness{}, &prediction, /*converged=*/false);
   if (late_trace != nullptr && !candidates_.empty() && candidates_.back().keyframe_id == id) {
     TraceCandidateSet(&candidates_.back(), *late_trace);
   }
@@ -253,13 +253,17 @@ void System::InitializeMetric(int frame_index, const ImagePyramidPtr& left, cons
   input.world_to_camera = T_world_camera.inverse();
   input.left = left;
   KeyframePrediction prediction;
-  if (capabilities_.has_right_image) input.right = MakePyramid(right);
+  if (capabilities_.has_right_image) {
+    input.right = MakePyramid(right);
+    input.right_brightness = StartingStereoBrightness(*left, *input.right);
+  }
   if (capabilities_.has_predictions) {
     prediction = FetchPrediction(frame_index, current_left_image_);  // a new map needs its depths now
     input.right_disparity = prediction.right;
   }
   window_->AddKeyframe(input);
-  AddCandidates(frame_index, *left, input.right.get(), capabilities_.has_predictions ? &prediction : nullptr,
+  AddCandidates(frame_index, *left, input.right.get(), input.right_brightness,
+                capabilities_.has_predictions ? &prediction : nullptr,
                 /*converged=*/true);
   // The first keyframe's candidates are activated at once with metric depth:
   // from the static stereo match (Stereo DSO) or the prediction (DVSO "in").

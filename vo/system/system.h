@@ -94,8 +94,19 @@ class System {
   // stereo matched; with a prediction their search interval comes from D^L
   // (pixels failing the left-right check or without D^L are not selected), and
   // `converged` makes them ready for activation at once (first keyframe).
+  // `right_brightness`: the pair's starting transfer, used when `right` is given (MatchStaticStereo).
   void AddCandidates(int keyframe_id, const ImagePyramid& left, const ImagePyramid* right,
-                     const KeyframePrediction* prediction, bool converged);
+                     const StereoBrightness& right_brightness, const KeyframePrediction* prediction, bool converged);
+  // Static stereo matching of a keyframe's candidates (Stereo DSO) with the pair's brightness
+  // transfer refitted from the matches (vo/frame/stereo_brightness.h); stores the final transfer in the
+  // window's keyframe and as the next keyframe's start. Returns the candidates that stay.
+  std::vector<ImmaturePoint> MatchStaticStereo(int keyframe_id, std::vector<ImmaturePoint> points,
+                                               const ImagePyramid& right, const StereoBrightness& start);
+  std::vector<ImmaturePoint> TraceStaticStereo(const std::vector<ImmaturePoint>& points, const ImagePyramid& right,
+                                               const StereoBrightness& transfer) const;
+  StereoBrightness FitStereoBrightnessFromMatches(const std::vector<ImmaturePoint>& traced, const ImagePyramid& right,
+                                                  const StereoBrightness& fallback) const;
+  StereoBrightness StartingStereoBrightness(const ImagePyramid& left, const ImagePyramid& right) const;
   void UpdateVirtualStereoStatistics();
   void RunOptimization(FrameEvent* event);
   void MarginalizeKeyframes();
@@ -140,6 +151,8 @@ class System {
   double first_rmse_ = 0;        // rmse of the first frame tracked against the current reference
   double last_rmse_ = 0;
   double activation_cell_ = 0;   // adaptive activation grid cell (pixels)
+  StereoBrightness last_right_brightness_;  // the last stereo keyframe's transfer (next keyframe's start)
+  bool have_right_brightness_ = false;
   double selector_block_size_ = 0;  // pixel selector block size that worked for the last keyframe
   int reference_id_ = -1;        // keyframe id the tracker uses
   Eigen::Isometry3d T_last_ref_ = Eigen::Isometry3d::Identity();   // last frame <- reference

@@ -32,7 +32,11 @@ PixelTransfer MakeTransfer(const PinholeCamera& cam, const Eigen::Isometry3d& T_
 void System::MakeKeyframe(int frame_index, const ImagePyramidPtr& left, const cv::Mat& right,
                           const Eigen::Isometry3d& T_cw, double a, double b, FrameEvent* event) {
   ImagePyramidPtr right_pyr;
-  if (capabilities_.has_right_image && !right.empty()) right_pyr = MakePyramid(right);
+  StereoBrightness right_brightness;
+  if (capabilities_.has_right_image && !right.empty()) {
+    right_pyr = MakePyramid(right);
+    right_brightness = StartingStereoBrightness(*left, *right_pyr);
+  }
   KeyframePrediction prediction;  // stays empty while a keyframe-async prediction is pending
   if (capabilities_.has_predictions) {
     if (prediction_timing_ == PredictionTiming::kKeyframeAsync) {
@@ -58,13 +62,15 @@ void System::MakeKeyframe(int frame_index, const ImagePyramidPtr& left, const cv
   input.b = b;
   input.left = left;
   input.right = right_pyr;
+  input.right_brightness = right_brightness;
   input.right_disparity = prediction.right;  // empty outside DVSO: no virtual stereo residuals
   window_->AddKeyframe(input);
   ActivateCandidates(frame_index, /*include_new_keyframe=*/false);
   RunOptimization(event);
   MarginalizeKeyframes();
   if (!capabilities_.has_predictions || have_prediction) {
-    AddCandidates(frame_index, *left, right_pyr.get(), have_prediction ? &prediction : nullptr, /*converged=*/false);
+    AddCandidates(frame_index, *left, right_pyr.get(), right_brightness, have_prediction ? &prediction : nullptr,
+                  /*converged=*/false);
   }
   ++num_keyframes_total_;
   SetTrackingReference(frame_index);
@@ -86,15 +92,93 @@ void System::TraceCandidateSet(KeyframeCandidates* candidates, const TraceTarget
   }
 }
 
+StereoBrightness System::StartingStereoBrightness(const ImagePyramid& left, const ImagePyramid& right) const {
+  // The previous stereo keyframe's refitted transfer (the same rig, a similar exposure);
+  // the first keyframe starts from the images' quantiles.
+  if (have_right_brightness_) return last_right_brightness_;
+  return EstimateStereoBrightness(left.level(0), right.level(0), options_.stereo_brightness);
+}
+
+std::vector<ImmaturePoint> System::TraceStaticStereo(const std::vector<ImmaturePoint>& points,
+                                                     const ImagePyramid& right,
+                                                     const StereoBrightness& transfer) const {
+  const Eigen::Vector3f stereo_Kt(static_cast<float>(-camera_.FxB()), 0.f, 0.f);
+  const float max_disparity = static_cast<float>(
+      std::min(options_.stereo_max_disparity_fraction * camera_.left.width, options_.stereo_max_disparity_px));
+  std::vector<ImmaturePoint> traced;
+  traced.reserve(points.size());
+  for (ImmaturePoint p : points) {
+    // Static stereo, through the pair's brightness transfer I_right ~ gain * I_left + bias.
+    const TraceStatus s = p.Trace(right.level(0), Eigen::Matrix3f::Identity(), stereo_Kt,
+                                  static_cast<float>(transfer.gain), static_cast<float>(transfer.bias),
+                                  options_.immature, max_disparity);
+    if (s == TraceStatus::kOutOfBounds) continue;
+    if (s != TraceStatus::kGood) {
+      // No usable stereo match: keep it as a plain candidate for temporal tracing.
+      p.idepth_min = 0;
+      p.idepth_max = std::numeric_limits<float>::infinity();
+      p.last_status = TraceStatus::kUninitialized;
+      p.quality = 10000.f;
+    }
+    traced.push_back(p);
+  }
+  return traced;
+}
+
+StereoBrightness System::FitStereoBrightnessFromMatches(const std::vector<ImmaturePoint>& traced,
+                                                        const ImagePyramid& right,
+                                                        const StereoBrightness& fallback) const {
+  const StereoBrightnessOptions& o = options_.stereo_brightness;
+  const PyramidLevel& level = right.level(0);
+  const float fxb = static_cast<float>(camera_.FxB());
+  std::vector<double> host_intensity, right_intensity;
+  int matched_points = 0;
+  for (const ImmaturePoint& p : traced) {
+    // Unambiguous matches only (DSO's activation quality): a repeated texture's
+    // wrong match would compare unrelated pixels.
+    if (p.last_status != TraceStatus::kGood || !p.ReadyForActivation(options_.immature)) continue;
+    const float x = p.u - fxb * p.IdepthEstimate();
+    if (!level.InBounds(x, p.v, kPatternRadius + 1.5f)) continue;
+    ++matched_points;
+    for (int k = 0; k < kPatternSize; ++k) {
+      host_intensity.push_back(p.color[k]);
+      right_intensity.push_back(
+          level.InterpolateIntensity(x + kPatternOffsets[k][0], p.v + kPatternOffsets[k][1]));
+    }
+  }
+  if (matched_points < o.min_matched_points) return fallback;
+  return FitBrightnessTransfer(host_intensity, right_intensity, o.huber_threshold, o.max_gain_ratio)
+      .value_or(fallback);
+}
+
+std::vector<ImmaturePoint> System::MatchStaticStereo(int keyframe_id, std::vector<ImmaturePoint> points,
+                                                     const ImagePyramid& right, const StereoBrightness& start) {
+  const StereoBrightnessOptions& o = options_.stereo_brightness;
+  StereoBrightness transfer = start;
+  std::vector<ImmaturePoint> traced = TraceStaticStereo(points, right, transfer);
+  if (o.estimate) {
+    // Refit from the matches; match again with the refitted transfer while it moves.
+    for (int pass = 1; pass < o.max_matching_passes; ++pass) {
+      const StereoBrightness refit = FitStereoBrightnessFromMatches(traced, right, transfer);
+      const bool moved = BrightnessTransferMoved(transfer, refit, o);
+      transfer = refit;
+      if (!moved) break;
+      traced = TraceStaticStereo(points, right, transfer);
+    }
+  }
+  last_right_brightness_ = transfer;
+  have_right_brightness_ = true;
+  window_->SetRightBrightness(keyframe_id, transfer);
+  return traced;
+}
+
 void System::AddCandidates(int keyframe_id, const ImagePyramid& left, const ImagePyramid* right,
-                           const KeyframePrediction* prediction, bool converged) {
+                           const StereoBrightness& right_brightness, const KeyframePrediction* prediction,
+                           bool converged) {
   KeyframeCandidates c;
   c.keyframe_id = keyframe_id;
   const std::vector<SelectedPixel> pixels = SelectPixels(left, options_.selector, &selector_block_size_);
   c.points.reserve(pixels.size());
-  const Eigen::Vector3f stereo_Kt(static_cast<float>(-camera_.FxB()), 0.f, 0.f);
-  const float max_disparity = static_cast<float>(
-      std::min(options_.stereo_max_disparity_fraction * camera_.left.width, options_.stereo_max_disparity_px));
   const DvsoOptions& dvso = options_.dvso;
   for (const SelectedPixel& px : pixels) {
     float predicted_idepth = 0.0f;
@@ -117,20 +201,10 @@ void System::AddCandidates(int keyframe_id, const ImagePyramid& left, const Imag
       // Depth initialisation "in": d = D^L(p) / (f_x b_v); the epipolar search refines it.
       p.SetPredictedInterval(predicted_idepth, static_cast<float>(dvso.init_relative_range), converged);
     }
-    if (right != nullptr) {
-      // Static stereo: the right image shares the keyframe's affine parameters.
-      const TraceStatus s = p.Trace(right->level(0), Eigen::Matrix3f::Identity(), stereo_Kt, 1.f, 0.f,
-                                    options_.immature, max_disparity);
-      if (s == TraceStatus::kOutOfBounds) continue;
-      if (s != TraceStatus::kGood) {
-        // No usable stereo match: keep it as a plain candidate for temporal tracing.
-        p.idepth_min = 0;
-        p.idepth_max = std::numeric_limits<float>::infinity();
-        p.last_status = TraceStatus::kUninitialized;
-        p.quality = 10000.f;
-      }
-    }
     c.points.push_back(p);
+  }
+  if (right != nullptr) {
+    c.points = MatchStaticStereo(keyframe_id, std::move(c.points), *right, right_brightness);
   }
   if (right != nullptr && !observers_.empty()) {
     std::vector<PointInfo> matched;

@@ -1,0 +1,120 @@
+#include "vo/frame/stereo_brightness.h"
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "core/error.h"
+
+namespace dvso::vo {
+
+namespace {
+
+// Every step-th intensity of `level` in columns [x_begin, x_end), sorted.
+std::vector<float> SortedSamples(const PyramidLevel& level, int x_begin, int x_end, int step) {
+  std::vector<float> samples;
+  samples.reserve(static_cast<size_t>((x_end - x_begin) / step + 1) * (level.height / step + 1));
+  for (int y = 0; y < level.height; y += step) {
+    for (int x = x_begin; x < x_end; x += step) samples.push_back(level.Intensity(x, y));
+  }
+  std::sort(samples.begin(), samples.end());
+  return samples;
+}
+
+// Value at quantile level q of sorted samples (linear between order statistics).
+float Quantile(const std::vector<float>& sorted, double q) {
+  const double position = q * static_cast<double>(sorted.size() - 1);
+  const size_t i = static_cast<size_t>(position);
+  if (i + 1 >= sorted.size()) return sorted.back();
+  const double t = position - static_cast<double>(i);
+  return static_cast<float>((1 - t) * sorted[i] + t * sorted[i + 1]);
+}
+
+}  // namespace
+
+void StereoBrightnessOptions::Check() const {
+  Require(sample_step >= 1, "stereo_brightness.sample_step must be >= 1");
+  Require(border_fraction >= 0 && border_fraction < 0.5, "stereo_brightness.border_fraction must be in [0, 0.5)");
+  Require(min_quantile >= 0 && min_quantile < max_quantile && max_quantile <= 1,
+          "stereo_brightness quantiles must satisfy 0 <= min_quantile < max_quantile <= 1");
+  Require(num_quantiles >= 3, "stereo_brightness.num_quantiles must be >= 3");
+  Require(huber_threshold > 0, "stereo_brightness.huber_threshold must be > 0");
+  Require(max_gain_ratio > 1, "stereo_brightness.max_gain_ratio must be > 1");
+  Require(min_matched_points >= 3, "stereo_brightness.min_matched_points must be >= 3");
+  Require(max_matching_passes >= 1, "stereo_brightness.max_matching_passes must be >= 1");
+  Require(rematch_gain_change > 0 && rematch_bias_change > 0, "stereo_brightness rematch thresholds must be > 0");
+}
+
+std::optional<StereoBrightness> FitBrightnessTransfer(const std::vector<double>& x, const std::vector<double>& y,
+                                                      double huber_threshold, double max_gain_ratio) {
+  Require(x.size() == y.size(), "brightness fit: sample vectors differ in length");
+  constexpr size_t kMinSamples = 3;
+  if (x.size() < kMinSamples) return std::nullopt;
+  constexpr int kReweightingIterations = 5;
+  std::vector<double> w(x.size(), 1.0);
+  StereoBrightness fit;
+  for (int iteration = 0; iteration < kReweightingIterations; ++iteration) {
+    // Weighted means, then the centred sums (numerically stable for intensities ~100).
+    double sw = 0, mx = 0, my = 0;
+    for (size_t i = 0; i < x.size(); ++i) {
+      sw += w[i];
+      mx += w[i] * x[i];
+      my += w[i] * y[i];
+    }
+    mx /= sw;
+    my /= sw;
+    double sxx = 0, sxy = 0;
+    for (size_t i = 0; i < x.size(); ++i) {
+      sxx += w[i] * (x[i] - mx) * (x[i] - mx);
+      sxy += w[i] * (x[i] - mx) * (y[i] - my);
+    }
+    constexpr double kMinSpread = 1e-6;  // weighted variance of x below this: no slope to fit
+    if (!(sxx > kMinSpread * sw)) return std::nullopt;
+    fit.gain = sxy / sxx;
+    fit.bias = my - fit.gain * mx;
+    for (size_t i = 0; i < x.size(); ++i) {
+      const double residual = std::abs(y[i] - (fit.gain * x[i] + fit.bias));
+      w[i] = residual <= huber_threshold ? 1.0 : huber_threshold / residual;
+    }
+  }
+  if (!std::isfinite(fit.gain) || !std::isfinite(fit.bias) || fit.gain < 1.0 / max_gain_ratio ||
+      fit.gain > max_gain_ratio) {
+    return std::nullopt;
+  }
+  return fit;
+}
+
+bool BrightnessTransferMoved(const StereoBrightness& a, const StereoBrightness& b,
+                             const StereoBrightnessOptions& options) {
+  return std::abs(a.gain - b.gain) > options.rematch_gain_change ||
+         std::abs(a.bias - b.bias) > options.rematch_bias_change;
+}
+
+StereoBrightness EstimateStereoBrightness(const PyramidLevel& left, const PyramidLevel& right,
+                                          const StereoBrightnessOptions& options) {
+  StereoBrightness identity;
+  if (!options.estimate) return identity;
+  Require(left.width == right.width && left.height == right.height, "stereo images must have the same size");
+  // The right camera sits at +baseline: a left pixel at x is seen at x - d on the right, so
+  // the left image's left strip and the right image's right strip have no counterpart.
+  const int border = static_cast<int>(options.border_fraction * left.width);
+  const std::vector<float> l = SortedSamples(left, border, left.width, options.sample_step);
+  const std::vector<float> r = SortedSamples(right, 0, right.width - border, options.sample_step);
+  if (l.size() < 2 || r.size() < 2) return identity;
+
+  // Quantile pairs; a level where either image is clipped (equal to its extreme
+  // value: black or saturated) carries no information about the transfer.
+  std::vector<double> x, y;  // quantiles of the left and the right image
+  for (int k = 0; k < options.num_quantiles; ++k) {
+    const double q =
+        options.min_quantile + (options.max_quantile - options.min_quantile) * k / (options.num_quantiles - 1);
+    const float lq = Quantile(l, q), rq = Quantile(r, q);
+    if (lq <= l.front() || lq >= l.back() || rq <= r.front() || rq >= r.back()) continue;
+    x.push_back(lq);
+    y.push_back(rq);
+  }
+
+  return FitBrightnessTransfer(x, y, options.huber_threshold, options.max_gain_ratio).value_or(identity);
+}
+
+}  // namespace dvso::vo

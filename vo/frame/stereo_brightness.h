@@ -1,0 +1,71 @@
+// Brightness transfer between the two images of a stereo pair.
+//
+// The two sensors of a real rig differ in gain and black level, and with
+// independent auto exposure the difference changes from frame to frame. The
+// static stereo term (Stereo DSO) compares the right image with the left one,
+// so it needs that transfer: Stereo DSO (Wang et al. 2017) gives each image its
+// own affine brightness for this reason. Without it, a right camera only 15 %
+// brighter made every static stereo match fail and Stereo DSO lost 99 of 100
+// frames (docs/labels.md, session 27).
+//
+// Two estimators, both a line fit y = gain x + bias (FitBrightnessTransfer):
+// - Before any point is matched (the matching needs a transfer), from the
+//   images alone: the two views see nearly the same scene, so their intensity
+//   distributions differ mainly by the transfer, and matching their quantiles
+//   needs no correspondence: Q_right(q) = gain * Q_left(q) + bias. Parallax and
+//   the side strips make it a rough start (gain off by up to ~15 % on the
+//   simulator's worlds), good enough for many matches to succeed.
+// - From the matches (the keyframe's static stereo matches, system_keyframes.cpp):
+//   host pattern intensities against the right image at the match. These are
+//   correspondences, so the fit is exact up to noise and wrong matches (Huber).
+// The odometry starts each stereo keyframe from the previous keyframe's transfer
+// (quantiles for the first one), matches, refits from the matches and, when the
+// transfer moved, matches again.
+#pragma once
+
+#include <optional>
+#include <vector>
+
+#include "vo/frame/image_pyramid.h"
+
+namespace dvso::vo {
+
+// I_right ~ gain * I_left + bias (the immature point's (a, b) convention; the
+// static stereo residual's affine_scale = gain, b_target = bias, b_host = 0).
+struct StereoBrightness {
+  double gain = 1.0;
+  double bias = 0.0;
+};
+
+struct StereoBrightnessOptions {
+  bool estimate = true;             // false: identical cameras assumed (gain 1, bias 0; the behaviour until session 27)
+  int sample_step = 4;              // px: every sample_step-th pixel in x and y (29k samples at 1241x376)
+  double border_fraction = 0.1;     // width fraction of the side the other camera does not see, left out of each image
+  double min_quantile = 0.05;       // lowest quantile level matched (below: noise and dark saturation)
+  double max_quantile = 0.95;       // highest quantile level matched (above: sky, bright saturation)
+  int num_quantiles = 37;           // quantile levels, evenly spaced in [min_quantile, max_quantile]
+  double huber_threshold = 4.0;     // Huber threshold of both line fits' residuals (intensity units of level 0)
+  double max_gain_ratio = 3.0;      // a fit outside [1 / this, this] means the views disagree: identity is used
+  int min_matched_points = 50;      // fewer unambiguous static stereo matches: the transfer is not refitted
+  int max_matching_passes = 3;      // match, refit, match again while the transfer moves (first keyframe: 2-3)
+  double rematch_gain_change = 0.01;  // a refit that moves the gain by more than this ...
+  double rematch_bias_change = 1.0;   // ... or the bias by more than this (intensity units) triggers another pass
+  void Check() const;
+};
+
+// Least-squares line y = gain * x + bias, reweighted with Huber weights (threshold in y's units).
+// None when fewer than 3 samples, no spread in x, or a gain outside [1 / max_gain_ratio, max_gain_ratio].
+std::optional<StereoBrightness> FitBrightnessTransfer(const std::vector<double>& x, const std::vector<double>& y,
+                                       double huber_threshold, double max_gain_ratio);
+
+// True when `b` differs from `a` by more than the options' rematch thresholds.
+bool BrightnessTransferMoved(const StereoBrightness& a, const StereoBrightness& b,
+                             const StereoBrightnessOptions& options);
+
+// The transfer of the pair (left, right) from quantiles, both level 0 of their pyramids (same size).
+// Returns the identity when options.estimate is false, when too few quantile
+// levels are usable (flat images), or when the fitted gain is implausible.
+StereoBrightness EstimateStereoBrightness(const PyramidLevel& left, const PyramidLevel& right,
+                                          const StereoBrightnessOptions& options);
+
+}  // namespace dvso::vo
