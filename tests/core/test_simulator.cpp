@@ -248,6 +248,31 @@ TEST(Simulator, DeterministicPerSeed) {
   EXPECT_EQ(cv::norm(a.left.grey, d.left.grey, cv::NORM_INF), 0);
 }
 
+// --right-gain / --right-bias: the right camera's own response; the left view and the geometry stay.
+TEST(Simulator, RightCameraGainAndBiasChangeOnlyTheRightImage) {
+  SimulatorOptions o = SmallOptions(160, 48);
+  o.num_frames = 1;
+  o.noise = false;  // compare the responses without the noise draw
+  const SimulatedFrame same = StreetSimulator(o).Render(0);
+  o.right_gain = 1.2;
+  o.right_bias = 7;
+  const SimulatedFrame other = StreetSimulator(o).Render(0);
+  EXPECT_EQ(cv::norm(same.left.grey, other.left.grey, cv::NORM_INF), 0);
+  EXPECT_EQ(cv::norm(same.right.depth, other.right.depth, cv::NORM_INF), 0);
+  int compared = 0, off = 0;
+  for (int y = 0; y < same.right.grey.rows; ++y) {
+    for (int x = 0; x < same.right.grey.cols; ++x) {
+      const double expected = 1.2 * same.right.grey.at<uint8_t>(y, x) + 7.0;
+      if (expected > 250) continue;  // saturated
+      ++compared;
+      // Both images are rounded to 8 bits: the bias enters before the rounding, the gain scales the other's rounding.
+      off += std::abs(other.right.grey.at<uint8_t>(y, x) - expected) > 1.2 * 0.5 + 0.5 + 1e-9;
+    }
+  }
+  EXPECT_GT(compared, same.right.grey.total() / 2);
+  EXPECT_EQ(off, 0);
+}
+
 TEST(Simulator, RejectsBadOptions) {
   auto expect_error = [](const std::function<void(SimulatorOptions&)>& change) {
     SimulatorOptions o = SmallOptions(160, 48);
@@ -267,6 +292,8 @@ TEST(Simulator, RejectsBadOptions) {
   expect_error([](SimulatorOptions& o) { o.scene.building_density = 1.5; });
   expect_error([](SimulatorOptions& o) { o.exposure_level = 0; });
   expect_error([](SimulatorOptions& o) { o.height_jitter = -0.01; });
+  expect_error([](SimulatorOptions& o) { o.right_gain = 0.3; });
+  expect_error([](SimulatorOptions& o) { o.right_bias = 50; });
   expect_error([](SimulatorOptions& o) {
     o.trajectory_path.clear();
     o.num_frames = -1;

@@ -6,6 +6,7 @@
 // at the right place (looser tolerance: bilinear slopes vs interpolated gradients).
 #include <gtest/gtest.h>
 
+#include "core/error.h"
 #include "tests/vo/test_backend_util.h"
 #include "vo/optimization/residuals.h"
 #include "vo/optimization/window.h"
@@ -208,6 +209,29 @@ TEST(BackendJacobians, StaticStereoValueMatchesClosedForm) {
     const double u_right = u - f.camera.left.fx * f.camera.baseline * p.idepth;
     EXPECT_NEAR(r(k), Ramp(u_right + 7.3, v) - Ramp(u, v), 2e-3);
   }
+}
+
+// A right camera with another gain and black level: r = (I_R(u') - bias) - gain * I_L(u)
+// (vo/frame/stereo_brightness.h); the inverse depth stays the only parameter.
+TEST(BackendJacobians, StaticStereoFollowsTheRightCamerasBrightnessTransfer) {
+  const StereoBrightness transfer{1.2, 5.0};
+  Fixture f = MakeFixture(Ramp, true, false);
+  f.window->SetRightBrightness(0, transfer);
+  const Point& p = f.window->keyframe(0).points[0];
+  const Residuals r = R(f, ResidualKind::kStaticStereo);
+  for (int k = 0; k < kPatternSize; ++k) {
+    const double u = p.u + kPatternOffsets[k][0], v = p.v + kPatternOffsets[k][1];
+    const double u_right = u - f.camera.left.fx * f.camera.baseline * p.idepth;
+    EXPECT_NEAR(r(k), (Ramp(u_right + 7.3, v) - transfer.bias) - transfer.gain * Ramp(u, v), 3e-3);
+  }
+  Fixture w = MakeFixture(Waves, true, false);
+  w.window->SetRightBrightness(0, transfer);
+  const auto numeric = NumericJacobian(w, ResidualKind::kStaticStereo);
+  const auto analytic = AnalyticJacobian(w, ResidualKind::kStaticStereo);
+  EXPECT_LT(numeric.leftCols<16>().norm(), 1e-6);
+  EXPECT_EQ(analytic.leftCols<16>().norm(), 0.0);
+  EXPECT_LT((analytic.col(16) - numeric.col(16)).norm(), 0.1 * numeric.col(16).norm());
+  EXPECT_THROW(w.window->SetRightBrightness(0, StereoBrightness{0.0, 0.0}), Error);
 }
 
 TEST(BackendJacobians, VirtualStereoValueMatchesEq58) {

@@ -33,6 +33,7 @@ struct RunOutcome {
   int lost = 0, initializing = 0;
   int max_window_span = 0;  // largest frame distance between the oldest and the newest keyframe of a window
   int keyframe_candidates = 0, keyframe_candidates_within_1px = 0;  // OnKeyframeCandidates against the GT
+  double stereo_gain = 0, stereo_bias = 0;  // the last frame's reported brightness transfer of the pair
 };
 
 // Records how far back in time the window reaches.
@@ -44,6 +45,12 @@ class WindowSpanObserver : public OdometryObserver {
     }
   }
   int max_span = 0;
+};
+
+class LastFrameObserver : public OdometryObserver {
+ public:
+  void OnFrameTracked(const FrameEvent& event) override { last = event; }
+  FrameEvent last;
 };
 
 // Compares the stereo-matched keyframe candidates (OnKeyframeCandidates) with the exact disparity.
@@ -65,9 +72,10 @@ class CandidateObserver : public OdometryObserver {
   const SimulatedSequence& seq_;
 };
 
-RunOutcome RunSystem(OdometryMode mode) {
+// `right_gain`, `right_bias`: the right images pass through I -> gain * I + bias (another sensor's response).
+RunOutcome RunSystem(OdometryMode mode, const OdometryOptions& options = {}, double right_gain = 1.0,
+                     double right_bias = 0.0) {
   const SimulatedSequence& seq = Sequence();
-  OdometryOptions options;
   System system(options, seq.camera, mode);
   TrajectoryRecorder recorder;
   system.AddObserver(&recorder);
@@ -75,9 +83,12 @@ RunOutcome RunSystem(OdometryMode mode) {
   system.AddObserver(&span);
   CandidateObserver candidates(seq);
   system.AddObserver(&candidates);
+  LastFrameObserver last_frame;
+  system.AddObserver(&last_frame);
   for (size_t i = 0; i < seq.left.size(); ++i) {
-    system.ProcessFrame(static_cast<int>(i), 0.1 * i, seq.left[i],
-                        mode == OdometryMode::kStereo ? seq.right[i] : cv::Mat());
+    cv::Mat right;
+    if (mode == OdometryMode::kStereo) seq.right[i].convertTo(right, -1, right_gain, right_bias);
+    system.ProcessFrame(static_cast<int>(i), 0.1 * i, seq.left[i], right);
   }
   system.Finish();
   RunOutcome r;
@@ -87,6 +98,8 @@ RunOutcome RunSystem(OdometryMode mode) {
   r.max_window_span = span.max_span;
   r.keyframe_candidates = candidates.count;
   r.keyframe_candidates_within_1px = candidates.within_1px;
+  r.stereo_gain = last_frame.last.stereo_gain;
+  r.stereo_bias = last_frame.last.stereo_bias;
   return r;
 }
 
@@ -119,6 +132,42 @@ TEST(SystemSimulated, StereoTracksEveryFrameWithMetricScale) {
             << r.keyframe_candidates_within_1px << " within 1 px of the exact disparity\n";
   EXPECT_GT(r.keyframe_candidates, 1000);
   EXPECT_GT(r.keyframe_candidates_within_1px, 0.85 * r.keyframe_candidates);  // measured 0.906 (before the label stereo check)
+}
+
+double MaxTranslationError(const Trajectory& estimate, const SimulatedSequence& seq) {
+  double max_err = 0;
+  for (size_t i = 0; i < seq.truth.size(); ++i) {
+    max_err = std::max(max_err, (estimate.poses[i].T_world_camera.translation() - seq.truth[i].translation()).norm());
+  }
+  return max_err;
+}
+
+// A right camera 15 % brighter with a higher black level (a real rig's two sensors): the pair's
+// brightness transfer is estimated (vo/frame/stereo_brightness.h) and Stereo DSO stays metric.
+// Without it the static stereo search compares unequal intensities (the control run below).
+TEST(SystemSimulated, StereoStaysMetricWithARightCameraOfAnotherGainAndBlackLevel) {
+  const SimulatedSequence& seq = Sequence();
+  const RunOutcome r = RunSystem(OdometryMode::kStereo, OdometryOptions{}, 1.15, 6.0);
+  ASSERT_EQ(r.estimate.size(), seq.truth.size());
+  EXPECT_EQ(r.lost, 0);
+  EXPECT_EQ(r.initializing, 0);
+  const double max_err = MaxTranslationError(r.estimate, seq);
+  EXPECT_LT(max_err, 0.02 * seq.path_length) << "max error " << max_err << " m over " << seq.path_length << " m";
+  EXPECT_NEAR(r.estimate.PathLength() / seq.path_length, 1.0, 0.02);
+  EXPECT_GT(r.keyframe_candidates, 1000);
+  EXPECT_GT(r.keyframe_candidates_within_1px, 0.85 * r.keyframe_candidates);
+  // The transfer refitted from the matches (8-bit rounding and clipping aside, exactly x1.15 + 6).
+  EXPECT_NEAR(r.stereo_gain, 1.15, 0.01);
+  EXPECT_NEAR(r.stereo_bias, 6.0, 1.0);
+
+  OdometryOptions identical_cameras;
+  identical_cameras.stereo_brightness.estimate = false;
+  const RunOutcome control = RunSystem(OdometryMode::kStereo, identical_cameras, 1.15, 6.0);
+  std::cout << "right camera x1.15 + 6: " << r.keyframe_candidates << " stereo-matched keyframe candidates with the "
+            << "transfer, " << control.keyframe_candidates << " without; lost frames " << r.lost << " / "
+            << control.lost << ", max error " << max_err << " / " << MaxTranslationError(control.estimate, seq)
+            << " m; transfer gain " << r.stereo_gain << ", bias " << r.stereo_bias << "\n";
+  EXPECT_LT(control.keyframe_candidates, r.keyframe_candidates / 2);
 }
 
 TEST(SystemSimulated, MonoTracksWithBoundedSim3Error) {

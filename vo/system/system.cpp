@@ -126,6 +126,8 @@ FrameEvent System::ProcessFrame(int frame_index, double timestamp, const cv::Mat
   for (const auto& c : candidates_) ev.immature_points += static_cast<int>(c.points.size());
   ev.virtual_stereo_residuals = virtual_stereo_residuals_;
   ev.virtual_stereo_energy = virtual_stereo_energy_;
+  ev.stereo_gain = last_right_brightness_.gain;
+  ev.stereo_bias = last_right_brightness_.bias;
   current_left_image_.release();
   last_T_world_camera_ = ev.T_world_camera;
   for (OdometryObserver* o : observers_) o->OnFrameTracked(ev);
@@ -144,6 +146,8 @@ FrameEvent System::ReportUnreadableFrame(int frame_index, double timestamp) {
     ev.window_keyframes = window_->num_keyframes();
     ev.active_points = window_->num_points();
   }
+  ev.stereo_gain = last_right_brightness_.gain;
+  ev.stereo_bias = last_right_brightness_.bias;
   for (OdometryObserver* o : observers_) o->OnFrameTracked(ev);
   return ev;
 }

@@ -1,0 +1,135 @@
+// The stereo pair's brightness transfer (vo/frame/stereo_brightness.h): the
+// line fit by hand, the quantile estimate on a synthetic pair with a known
+// transfer and disparity, and the options that switch it off.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+#include <random>
+
+#include "core/error.h"
+#include "tests/vo/test_backend_util.h"
+#include "vo/frame/stereo_brightness.h"
+
+namespace dvso::vo {
+namespace {
+
+using testing::ImageFromFunction;
+using testing::MakePyramid;
+using testing::SmallCamera;
+
+TEST(StereoBrightness, LineFitRecoversAnExactTransfer) {
+  std::vector<double> x, y;
+  for (int i = 0; i < 20; ++i) {
+    x.push_back(10.0 + 11.0 * i);
+    y.push_back(1.25 * x.back() - 7.0);
+  }
+  const auto fit = FitBrightnessTransfer(x, y, 4.0, 3.0);
+  ASSERT_TRUE(fit.has_value());
+  EXPECT_NEAR(fit->gain, 1.25, 1e-9);
+  EXPECT_NEAR(fit->bias, -7.0, 1e-7);
+}
+
+TEST(StereoBrightness, LineFitHandComputedLeastSquares) {
+  // Points (0, 1), (1, 2), (2, 4): slope = sum (x - 1)(y - 7/3) / sum (x - 1)^2 = (-1 * -4/3 + 1 * 5/3) / 2 = 1.5,
+  // bias = 7/3 - 1.5 = 0.8333... (residuals 1/6, -1/3, 1/6 stay below the Huber threshold).
+  const auto fit = FitBrightnessTransfer({0, 1, 2}, {1, 2, 4}, 4.0, 3.0);
+  ASSERT_TRUE(fit.has_value());
+  EXPECT_NEAR(fit->gain, 1.5, 1e-12);
+  EXPECT_NEAR(fit->bias, 7.0 / 3.0 - 1.5, 1e-12);
+}
+
+TEST(StereoBrightness, HuberWeightsKeepAGrossOutlierFromPullingTheLine) {
+  std::vector<double> x, y;
+  for (int i = 0; i < 40; ++i) {
+    x.push_back(20.0 + 5.0 * i);
+    y.push_back(0.9 * x.back() + 3.0);
+  }
+  x.push_back(100.0);
+  y.push_back(250.0);  // a wrong match: 157 grey levels off the line
+  const auto robust = FitBrightnessTransfer(x, y, 4.0, 3.0);
+  const auto plain = FitBrightnessTransfer(x, y, 1e9, 3.0);  // no reweighting
+  ASSERT_TRUE(robust.has_value() && plain.has_value());
+  EXPECT_NEAR(robust->gain, 0.9, 0.01);
+  EXPECT_NEAR(robust->bias, 3.0, 1.0);
+  EXPECT_GT(std::abs(plain->bias - 3.0), 2.0);  // the outlier does pull an unweighted fit
+}
+
+TEST(StereoBrightness, LineFitRefusesTooFewFlatOrImplausibleSamples) {
+  EXPECT_FALSE(FitBrightnessTransfer({1, 2}, {1, 2}, 4.0, 3.0).has_value());                // too few
+  EXPECT_FALSE(FitBrightnessTransfer({5, 5, 5, 5}, {1, 2, 3, 4}, 4.0, 3.0).has_value());    // no spread in x
+  EXPECT_FALSE(FitBrightnessTransfer({0, 1, 2, 3}, {0, 5, 10, 15}, 4.0, 3.0).has_value());  // gain 5 > 3
+  EXPECT_FALSE(FitBrightnessTransfer({0, 1, 2, 3}, {3, 2, 1, 0}, 4.0, 3.0).has_value());    // negative gain
+}
+
+// A textured image (smoothed noise, the scale of street texture) and the
+// right view of a fronto-parallel scene at `disparity` px through (gain, bias).
+struct Pair {
+  ImagePyramidPtr left, right;
+};
+Pair MakePair(double disparity, double gain, double bias) {
+  const PinholeCamera camera = SmallCamera(400, 200);
+  cv::Mat noise(camera.height, camera.width + 64, CV_32FC1);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(0.f, 255.f);
+  for (int y = 0; y < noise.rows; ++y)
+    for (int x = 0; x < noise.cols; ++x) noise.at<float>(y, x) = u(rng);
+  cv::GaussianBlur(noise, noise, cv::Size(0, 0), 2.0);
+  cv::normalize(noise, noise, 20, 230, cv::NORM_MINMAX);
+  auto scene = [&](double x, double y) {  // bilinear read of the texture, x shifted into its margin
+    const double xs = x + 32.0;
+    const int ix = static_cast<int>(std::floor(xs)), iy = static_cast<int>(y);
+    const double t = xs - ix;
+    return (1 - t) * noise.at<float>(iy, ix) + t * noise.at<float>(iy, ix + 1);
+  };
+  Pair p;
+  p.left = MakePyramid(ImageFromFunction(camera, [&](double x, double y) { return static_cast<float>(scene(x, y)); }),
+                       camera);
+  // Right camera at +baseline: the scene point at left x appears at x - d, i.e. I_R(x) = T(I_L(x + d)).
+  p.right = MakePyramid(ImageFromFunction(camera,
+                                          [&](double x, double y) {
+                                            return static_cast<float>(gain * scene(x + disparity, y) + bias);
+                                          }),
+                        camera);
+  return p;
+}
+
+TEST(StereoBrightness, QuantilesRecoverTheTransferOfAShiftedPair) {
+  for (const auto& [gain, bias] : {std::pair{1.2, 10.0}, std::pair{0.85, -6.0}, std::pair{1.0, 0.0}}) {
+    const Pair p = MakePair(9.5, gain, bias);
+    const StereoBrightness t = EstimateStereoBrightness(p.left->level(0), p.right->level(0), {});
+    EXPECT_NEAR(t.gain, gain, 0.02) << gain << " " << bias;
+    EXPECT_NEAR(t.bias, bias, 2.5) << gain << " " << bias;
+  }
+}
+
+TEST(StereoBrightness, SwitchedOffOrFlatImagesGiveTheIdentity) {
+  const Pair p = MakePair(9.5, 1.2, 10.0);
+  StereoBrightnessOptions off;
+  off.estimate = false;
+  const StereoBrightness t = EstimateStereoBrightness(p.left->level(0), p.right->level(0), off);
+  EXPECT_EQ(t.gain, 1.0);
+  EXPECT_EQ(t.bias, 0.0);
+  const PinholeCamera camera = SmallCamera(64, 48);
+  const ImagePyramidPtr flat = MakePyramid(ImageFromFunction(camera, [](double, double) { return 90.f; }), camera);
+  const StereoBrightness f = EstimateStereoBrightness(flat->level(0), flat->level(0), {});
+  EXPECT_EQ(f.gain, 1.0);
+  EXPECT_EQ(f.bias, 0.0);
+}
+
+TEST(StereoBrightness, OptionsAreChecked) {
+  StereoBrightnessOptions o;
+  EXPECT_NO_THROW(o.Check());
+  o.min_quantile = 0.9;
+  o.max_quantile = 0.5;
+  EXPECT_THROW(o.Check(), Error);
+  o = {};
+  o.max_gain_ratio = 1.0;
+  EXPECT_THROW(o.Check(), Error);
+  o = {};
+  o.max_matching_passes = 0;
+  EXPECT_THROW(o.Check(), Error);
+}
+
+}  // namespace
+}  // namespace dvso::vo
