@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 
 #include "core/lie.h"
 #include "tests/vo/frontend_test_scene.h"
@@ -62,6 +63,27 @@ TEST(FrontendMonoInit, TurningStartRotationIsNotTakenForTranslation) {
     }
   }
   EXPECT_TRUE(done) << "not initialised after " << frames << " frames";
+}
+
+// A frame that makes the optimisation diverge (here: non-finite intensities) fails the
+// initialiser, and the pose it keeps is the last finite one: the System places the restart
+// with T_last_first(), and a non-finite pose there would make every later pose non-finite.
+TEST(FrontendMonoInit, DivergenceKeepsTheLastFinitePose) {
+  BoxScene scene;
+  const PinholeCamera cam = TestCamera();
+  cv::Mat image;
+  scene.Render(cam, TurningPose(0, 0.0, 0.1), &image, nullptr);
+  MonoInitializer init(MonoInitializerOptions{}, PixelSelectorOptions{}, CoarseTrackerOptions{});
+  init.SetFirstFrame(std::make_shared<ImagePyramid>(image, cam));
+  scene.Render(cam, TurningPose(1, 0.0, 0.1), &image, nullptr);
+  ASSERT_FALSE(init.AddFrame(ImagePyramid(image, cam)));
+  ASSERT_FALSE(init.failed());
+  const Eigen::Isometry3d before = init.T_last_first();
+  cv::Mat broken(cam.height, cam.width, CV_32FC1, cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
+  EXPECT_FALSE(init.AddFrame(ImagePyramid(broken, cam)));
+  EXPECT_TRUE(init.failed());
+  EXPECT_TRUE(init.T_last_first().matrix().allFinite());
+  EXPECT_TRUE(init.T_last_first().isApprox(before));
 }
 
 }  // namespace

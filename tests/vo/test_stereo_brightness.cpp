@@ -30,13 +30,35 @@ TEST(StereoBrightness, LineFitRecoversAnExactTransfer) {
   EXPECT_NEAR(fit->bias, -7.0, 1e-7);
 }
 
-TEST(StereoBrightness, LineFitHandComputedLeastSquares) {
-  // Points (0, 1), (1, 2), (2, 4): slope = sum (x - 1)(y - 7/3) / sum (x - 1)^2 = (-1 * -4/3 + 1 * 5/3) / 2 = 1.5,
-  // bias = 7/3 - 1.5 = 0.8333... (residuals 1/6, -1/3, 1/6 stay below the Huber threshold).
+TEST(StereoBrightness, LineFitHandComputedOrthogonalLeastSquares) {
+  // Points (0, 1), (1, 2), (2, 4): means 1 and 7/3; centred sums Sxx = 2, Syy = 42/9, Sxy = 3.
+  // Orthogonal slope (Syy - Sxx + sqrt((Syy - Sxx)^2 + 4 Sxy^2)) / (2 Sxy) = (24/9 + sqrt((24/9)^2 + 36)) / 6
+  // = 1.538762...; the ordinary least-squares slope would be Sxy / Sxx = 1.5. Residuals stay below the Huber threshold.
   const auto fit = FitBrightnessTransfer({0, 1, 2}, {1, 2, 4}, 4.0, 3.0);
   ASSERT_TRUE(fit.has_value());
-  EXPECT_NEAR(fit->gain, 1.5, 1e-12);
-  EXPECT_NEAR(fit->bias, 7.0 / 3.0 - 1.5, 1e-12);
+  const double slope = (24.0 / 9.0 + std::sqrt(24.0 / 9.0 * 24.0 / 9.0 + 36.0)) / 6.0;
+  EXPECT_NEAR(fit->gain, slope, 1e-12);
+  EXPECT_NEAR(fit->gain, 1.538762, 1e-6);
+  EXPECT_NEAR(fit->bias, 7.0 / 3.0 - slope, 1e-12);
+}
+
+// With the same noise on both sides the orthogonal slope stays at the true gain where the
+// ordinary one shrinks by var(noise) / var(x) (errors in variables).
+TEST(StereoBrightness, LineFitIsNotAttenuatedByNoiseInTheLeftIntensities) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> signal(60.0, 100.0);  // std 11.5: a low-contrast world
+  std::normal_distribution<double> noise(0.0, 3.0);
+  std::vector<double> x, y;
+  for (int i = 0; i < 200000; ++i) {
+    const double s = signal(rng);
+    x.push_back(s + noise(rng));
+    y.push_back(1.1 * s + 4.0 + noise(rng));
+  }
+  const auto fit = FitBrightnessTransfer(x, y, 1e9, 3.0);
+  ASSERT_TRUE(fit.has_value());
+  // Ordinary least squares would give 1.1 * 133.3 / (133.3 + 9) = 1.030; Deming with equal variances
+  // is unbiased only for gain 1, and at 1.1 with noise 3 its bias is below 0.005.
+  EXPECT_NEAR(fit->gain, 1.1, 0.005);
 }
 
 TEST(StereoBrightness, HuberWeightsKeepAGrossOutlierFromPullingTheLine) {

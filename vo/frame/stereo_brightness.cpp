@@ -63,14 +63,17 @@ std::optional<StereoBrightness> FitBrightnessTransfer(const std::vector<double>&
     }
     mx /= sw;
     my /= sw;
-    double sxx = 0, sxy = 0;
+    double sxx = 0, syy = 0, sxy = 0;
     for (size_t i = 0; i < x.size(); ++i) {
       sxx += w[i] * (x[i] - mx) * (x[i] - mx);
+      syy += w[i] * (y[i] - my) * (y[i] - my);
       sxy += w[i] * (x[i] - mx) * (y[i] - my);
     }
-    constexpr double kMinSpread = 1e-6;  // weighted variance of x below this: no slope to fit
-    if (!(sxx > kMinSpread * sw)) return std::nullopt;
-    fit.gain = sxy / sxx;
+    constexpr double kMinSpread = 1e-6;  // weighted variance below this: no slope to fit
+    if (!(sxx > kMinSpread * sw) || !(std::abs(sxy) > kMinSpread * sw)) return std::nullopt;
+    // Orthogonal (total least squares) slope: both sides carry the same sensor noise, and the
+    // ordinary slope sxy / sxx would shrink by var(noise) / var(x) (0.5 % on a simulated world).
+    fit.gain = (syy - sxx + std::sqrt((syy - sxx) * (syy - sxx) + 4 * sxy * sxy)) / (2 * sxy);
     fit.bias = my - fit.gain * mx;
     for (size_t i = 0; i < x.size(); ++i) {
       const double residual = std::abs(y[i] - (fit.gain * x[i] + fit.bias));

@@ -8,7 +8,7 @@
 // brighter made every static stereo match fail and Stereo DSO lost 99 of 100
 // frames (docs/labels.md, session 27).
 //
-// Two estimators, both a line fit y = gain x + bias (FitBrightnessTransfer):
+// Two estimators, both a line fit y = gain x + bias (FitBrightnessTransfer, orthogonal):
 // - Before any point is matched (the matching needs a transfer), from the
 //   images alone: the two views see nearly the same scene, so their intensity
 //   distributions differ mainly by the transfer, and matching their quantiles
@@ -53,7 +53,9 @@ struct StereoBrightnessOptions {
   void Check() const;
 };
 
-// Least-squares line y = gain * x + bias, reweighted with Huber weights (threshold in y's units).
+// Line y = gain * x + bias by orthogonal least squares (x and y equally noisy: the slope of the
+// centred sums, g = (Syy - Sxx + sqrt((Syy - Sxx)^2 + 4 Sxy^2)) / (2 Sxy)), reweighted with Huber
+// weights of the vertical residuals (threshold in y's units).
 // None when fewer than 3 samples, no spread in x, or a gain outside [1 / max_gain_ratio, max_gain_ratio].
 std::optional<StereoBrightness> FitBrightnessTransfer(const std::vector<double>& x, const std::vector<double>& y,
                                        double huber_threshold, double max_gain_ratio);

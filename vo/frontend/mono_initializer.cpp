@@ -325,16 +325,17 @@ bool MonoInitializer::AddFrame(const ImagePyramid& frame) {
   const double a = best.a, b = best.b;
   const double last_energy = best.energy;
   const int last_num = best.num;
+  const double rmse = std::sqrt(last_energy / last_num);
+  if (!std::isfinite(rmse) || !T.matrix().allFinite() || !std::isfinite(a) || !std::isfinite(b)) {
+    // Diverged: keep the last finite state, which the caller reads (T_last_first) to place the restart.
+    failed_ = true;
+    return false;
+  }
   for (int i = 0; i < n; ++i) points_[i].idepth = idepths[i];
   velocity_ = Orthonormalized(T * T_prev.inverse());
   T_ = T;
   a_ = a;
   b_ = b;
-  const double rmse = std::sqrt(last_energy / last_num);
-  if (!std::isfinite(rmse) || !T.matrix().allFinite()) {
-    failed_ = true;
-    return false;
-  }
   if (frames_ < options_.min_frames || MedianTranslationFlow(T) < options_.min_parallax_px) return false;
 
   // Success: keep the points whose own residuals are reasonable.

@@ -101,11 +101,12 @@ class System {
   // transfer refitted from the matches (vo/frame/stereo_brightness.h); stores the final transfer in the
   // window's keyframe and as the next keyframe's start. Returns the candidates that stay.
   std::vector<ImmaturePoint> MatchStaticStereo(int keyframe_id, std::vector<ImmaturePoint> points,
-                                               const ImagePyramid& right, const StereoBrightness& start);
+                                               const ImagePyramid& left, const ImagePyramid& right,
+                                               const StereoBrightness& start);
   std::vector<ImmaturePoint> TraceStaticStereo(const std::vector<ImmaturePoint>& points, const ImagePyramid& right,
                                                const StereoBrightness& transfer) const;
-  StereoBrightness FitStereoBrightnessFromMatches(const std::vector<ImmaturePoint>& traced, const ImagePyramid& right,
-                                                  const StereoBrightness& fallback) const;
+  StereoBrightness FitStereoBrightnessFromMatches(const std::vector<ImmaturePoint>& traced, const ImagePyramid& left,
+                                                  const ImagePyramid& right, const StereoBrightness& fallback) const;
   StereoBrightness StartingStereoBrightness(const ImagePyramid& left, const ImagePyramid& right) const;
   void UpdateVirtualStereoStatistics();
   void RunOptimization(FrameEvent* event);

@@ -126,10 +126,11 @@ std::vector<ImmaturePoint> System::TraceStaticStereo(const std::vector<ImmatureP
 }
 
 StereoBrightness System::FitStereoBrightnessFromMatches(const std::vector<ImmaturePoint>& traced,
-                                                        const ImagePyramid& right,
+                                                        const ImagePyramid& left, const ImagePyramid& right,
                                                         const StereoBrightness& fallback) const {
   const StereoBrightnessOptions& o = options_.stereo_brightness;
-  const PyramidLevel& level = right.level(0);
+  const PyramidLevel& host = left.level(0);
+  const PyramidLevel& target = right.level(0);
   const float fxb = static_cast<float>(camera_.FxB());
   std::vector<double> host_intensity, right_intensity;
   int matched_points = 0;
@@ -138,12 +139,20 @@ StereoBrightness System::FitStereoBrightnessFromMatches(const std::vector<Immatu
     // wrong match would compare unrelated pixels.
     if (p.last_status != TraceStatus::kGood || !p.ReadyForActivation(options_.immature)) continue;
     const float x = p.u - fxb * p.IdepthEstimate();
-    if (!level.InBounds(x, p.v, kPatternRadius + 1.5f)) continue;
+    // Both images are read half a sub-pixel step off: bilinear interpolation at a fraction t
+    // averages neighbours with weight t (1 - t), and reading only the right image between pixels
+    // would smooth it alone. Candidates sit at intensity extremes (high gradient), so the smoothed
+    // side regresses towards the local mean and the fit finds gain < 1 with identical cameras
+    // (0.985, bias +0.6 on a simulated world before this). Read at x - f/2 and u - f/2 (f = frac x),
+    // the two fractions are f/2 and 1 - f/2: the same smoothing on both sides.
+    const float half_fraction = 0.5f * (x - std::floor(x));
+    const float xr = x - half_fraction, xl = p.u - half_fraction;
+    if (!target.InBounds(xr, p.v, kPatternRadius + 1.5f) || !host.InBounds(xl, p.v, kPatternRadius + 1.5f)) continue;
     ++matched_points;
     for (int k = 0; k < kPatternSize; ++k) {
-      host_intensity.push_back(p.color[k]);
-      right_intensity.push_back(
-          level.InterpolateIntensity(x + kPatternOffsets[k][0], p.v + kPatternOffsets[k][1]));
+      const float dx = static_cast<float>(kPatternOffsets[k][0]), dy = static_cast<float>(kPatternOffsets[k][1]);
+      host_intensity.push_back(host.InterpolateIntensity(xl + dx, p.v + dy));
+      right_intensity.push_back(target.InterpolateIntensity(xr + dx, p.v + dy));
     }
   }
   if (matched_points < o.min_matched_points) return fallback;
@@ -152,14 +161,15 @@ StereoBrightness System::FitStereoBrightnessFromMatches(const std::vector<Immatu
 }
 
 std::vector<ImmaturePoint> System::MatchStaticStereo(int keyframe_id, std::vector<ImmaturePoint> points,
-                                                     const ImagePyramid& right, const StereoBrightness& start) {
+                                                     const ImagePyramid& left, const ImagePyramid& right,
+                                                     const StereoBrightness& start) {
   const StereoBrightnessOptions& o = options_.stereo_brightness;
   StereoBrightness transfer = start;
   std::vector<ImmaturePoint> traced = TraceStaticStereo(points, right, transfer);
   if (o.estimate) {
     // Refit from the matches; match again with the refitted transfer while it moves.
     for (int pass = 1; pass < o.max_matching_passes; ++pass) {
-      const StereoBrightness refit = FitStereoBrightnessFromMatches(traced, right, transfer);
+      const StereoBrightness refit = FitStereoBrightnessFromMatches(traced, left, right, transfer);
       const bool moved = BrightnessTransferMoved(transfer, refit, o);
       transfer = refit;
       if (!moved) break;
@@ -204,7 +214,7 @@ void System::AddCandidates(int keyframe_id, const ImagePyramid& left, const Imag
     c.points.push_back(p);
   }
   if (right != nullptr) {
-    c.points = MatchStaticStereo(keyframe_id, std::move(c.points), *right, right_brightness);
+    c.points = MatchStaticStereo(keyframe_id, std::move(c.points), left, *right, right_brightness);
   }
   if (right != nullptr && !observers_.empty()) {
     std::vector<PointInfo> matched;
