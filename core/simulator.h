@@ -40,7 +40,9 @@ struct SimulatorOptions {
   double exposure_max = 0.35;       // bound on |log gain|
   double bias_sigma = 0.6;          // std of the per-frame bias random-walk step (grey levels)
   // The right camera's own response (a real rig's two sensors differ in gain and black level; Stereo DSO
-  // estimates an affine brightness per image for that reason): I_right = right_gain * (left's model) + right_bias.
+  // estimates an affine brightness per image for that reason): the right view is rendered with gain
+  // gain_i * right_gain and bias b_i + right_bias, so I_right = right_gain * (I_left - b_i) + b_i + right_bias
+  // for the same radiance and vignetting.
   double right_gain = 1.0;          // gain of the right camera relative to the left
   double right_bias = 0.0;          // extra brightness offset of the right camera (grey levels)
   bool vignetting = true;           // radial fall-off V(r) = 1 - strength (r / r_corner)^2

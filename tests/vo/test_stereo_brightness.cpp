@@ -56,8 +56,9 @@ TEST(StereoBrightness, LineFitIsNotAttenuatedByNoiseInTheLeftIntensities) {
   }
   const auto fit = FitBrightnessTransfer(x, y, 1e9, 3.0);
   ASSERT_TRUE(fit.has_value());
-  // Ordinary least squares would give 1.1 * 133.3 / (133.3 + 9) = 1.030; Deming with equal variances
-  // is unbiased only for gain 1, and at 1.1 with noise 3 its bias is below 0.005.
+  // Ordinary least squares would give 1.1 * 133.3 / (133.3 + 9) = 1.030. The orthogonal fit is consistent
+  // for any gain when both sides carry the same noise variance, as here (the right image's noise is
+  // added after its gain).
   EXPECT_NEAR(fit->gain, 1.1, 0.005);
 }
 
@@ -151,6 +152,15 @@ TEST(StereoBrightness, OptionsAreChecked) {
   o = {};
   o.max_matching_passes = 0;
   EXPECT_THROW(o.Check(), Error);
+}
+
+TEST(StereoBrightness, ChangeIsMeasuredOverTheIntensitiesThatOccur) {
+  // Gain and bias trade against each other: x1.01 - 1.2 is within 0.2 of the identity on [60, 120]
+  // although its bias alone moved by 1.2.
+  const StereoBrightness a{1.0, 0.0}, b{1.01, -1.2};
+  EXPECT_NEAR(BrightnessTransferChange(a, b, 60, 120), 0.6, 1e-12);  // |0.01 * 60 - 1.2| = 0.6, |1.2 - 1.2| = 0
+  EXPECT_NEAR(BrightnessTransferChange(a, b, 0, 255), 1.35, 1e-12);  // |0.01 * 255 - 1.2| = 1.35
+  EXPECT_EQ(BrightnessTransferChange(a, a, 0, 255), 0.0);
 }
 
 }  // namespace

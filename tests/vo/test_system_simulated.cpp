@@ -157,9 +157,11 @@ TEST(SystemSimulated, StereoStaysMetricWithARightCameraOfAnotherGainAndBlackLeve
   EXPECT_GT(r.keyframe_candidates, 1000);
   EXPECT_GT(r.keyframe_candidates_within_1px, 0.85 * r.keyframe_candidates);
   // The transfer refitted from the matches (8-bit rounding and clipping aside, exactly x1.15 + 6): within
-  // 2 grey levels over the intensities of the scene (measured: x1.160 + 5.55).
+  // 1.5 % + 0.5 grey levels over the intensities of the scene (measured: x1.162 + 5.44, 1.8 off at 200; the
+  // orthogonal fit leans a little steep because convertTo scales the right image's noise by 1.15).
   for (const double intensity : {40.0, 120.0, 200.0}) {
-    EXPECT_NEAR(r.stereo_gain * intensity + r.stereo_bias, 1.15 * intensity + 6.0, 2.0) << intensity;
+    const double expected = 1.15 * intensity + 6.0;
+    EXPECT_NEAR(r.stereo_gain * intensity + r.stereo_bias, expected, 0.015 * expected + 0.5) << intensity;
   }
 
   OdometryOptions identical_cameras;

@@ -42,7 +42,7 @@ void StereoBrightnessOptions::Check() const {
   Require(max_gain_ratio > 1, "stereo_brightness.max_gain_ratio must be > 1");
   Require(min_matched_points >= 3, "stereo_brightness.min_matched_points must be >= 3");
   Require(max_matching_passes >= 1, "stereo_brightness.max_matching_passes must be >= 1");
-  Require(rematch_gain_change > 0 && rematch_bias_change > 0, "stereo_brightness rematch thresholds must be > 0");
+  Require(rematch_change > 0, "stereo_brightness.rematch_change must be > 0");
 }
 
 std::optional<StereoBrightness> FitBrightnessTransfer(const std::vector<double>& x, const std::vector<double>& y,
@@ -87,10 +87,10 @@ std::optional<StereoBrightness> FitBrightnessTransfer(const std::vector<double>&
   return fit;
 }
 
-bool BrightnessTransferMoved(const StereoBrightness& a, const StereoBrightness& b,
-                             const StereoBrightnessOptions& options) {
-  return std::abs(a.gain - b.gain) > options.rematch_gain_change ||
-         std::abs(a.bias - b.bias) > options.rematch_bias_change;
+double BrightnessTransferChange(const StereoBrightness& a, const StereoBrightness& b, double low, double high) {
+  // The difference is linear in I: its largest magnitude on [low, high] is at an end.
+  const double dg = b.gain - a.gain, db = b.bias - a.bias;
+  return std::max(std::abs(dg * low + db), std::abs(dg * high + db));
 }
 
 StereoBrightness EstimateStereoBrightness(const PyramidLevel& left, const PyramidLevel& right,

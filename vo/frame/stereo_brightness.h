@@ -4,9 +4,10 @@
 // independent auto exposure the difference changes from frame to frame. The
 // static stereo term (Stereo DSO) compares the right image with the left one,
 // so it needs that transfer: Stereo DSO (Wang et al. 2017) gives each image its
-// own affine brightness for this reason. Without it, a right camera only 15 %
-// brighter made every static stereo match fail and Stereo DSO lost 99 of 100
-// frames (docs/labels.md, session 27).
+// own affine brightness for this reason. Without it, a right camera 15 %
+// brighter with a black level 6 grey levels higher made nearly every static
+// stereo match fail and Stereo DSO lost 99 of 100 frames (docs/labels.md,
+// "Session 27"). On the real KITTI 2015 pair the fit is x0.985 + 5.4.
 //
 // Two estimators, both a line fit y = gain x + bias (FitBrightnessTransfer, orthogonal):
 // - Before any point is matched (the matching needs a transfer), from the
@@ -48,8 +49,8 @@ struct StereoBrightnessOptions {
   double max_gain_ratio = 3.0;      // a fit outside [1 / this, this] means the views disagree: identity is used
   int min_matched_points = 50;      // fewer unambiguous static stereo matches: the transfer is not refitted
   int max_matching_passes = 3;      // match, refit, match again while the transfer moves (first keyframe: 2-3)
-  double rematch_gain_change = 0.01;  // a refit that moves the gain by more than this ...
-  double rematch_bias_change = 1.0;   // ... or the bias by more than this (intensity units) triggers another pass
+  double rematch_change = 1.0;      // a refit that moves the transfer by more than this anywhere in the samples'
+                                    // intensity range (intensity units) triggers another matching pass
   void Check() const;
 };
 
@@ -60,9 +61,10 @@ struct StereoBrightnessOptions {
 std::optional<StereoBrightness> FitBrightnessTransfer(const std::vector<double>& x, const std::vector<double>& y,
                                        double huber_threshold, double max_gain_ratio);
 
-// True when `b` differs from `a` by more than the options' rematch thresholds.
-bool BrightnessTransferMoved(const StereoBrightness& a, const StereoBrightness& b,
-                             const StereoBrightnessOptions& options);
+// Largest |(b.gain - a.gain) I + (b.bias - a.bias)| over I in [low, high]: how far two transfers
+// disagree on the intensities that occur (gain and bias of a fit trade against each other, so
+// comparing them one by one would compare extrapolations to intensity 0).
+double BrightnessTransferChange(const StereoBrightness& a, const StereoBrightness& b, double low, double high);
 
 // The transfer of the pair (left, right) from quantiles, both level 0 of their pyramids (same size).
 // Returns the identity when options.estimate is false, when too few quantile

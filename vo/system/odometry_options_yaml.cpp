@@ -46,8 +46,7 @@ void VisitFields(Options& o, Visitor&& v) {
   v("stereo_brightness", "max_gain_ratio", o.stereo_brightness.max_gain_ratio);
   v("stereo_brightness", "min_matched_points", o.stereo_brightness.min_matched_points);
   v("stereo_brightness", "max_matching_passes", o.stereo_brightness.max_matching_passes);
-  v("stereo_brightness", "rematch_gain_change", o.stereo_brightness.rematch_gain_change);
-  v("stereo_brightness", "rematch_bias_change", o.stereo_brightness.rematch_bias_change);
+  v("stereo_brightness", "rematch_change", o.stereo_brightness.rematch_change);
 
   v("selector", "desired_points", o.selector.desired_points);
   v("selector", "region_size", o.selector.region_size);

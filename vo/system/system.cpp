@@ -340,6 +340,8 @@ void System::ResetAfterLoss(int frame_index, const Eigen::Isometry3d& predicted)
   // first one did (a grid grown to its 100 px cap would give the new first keyframe a few dozen points).
   activation_cell_ = InitialActivationCell();
   selector_block_size_ = 0;
+  // A wrong transfer may have caused the loss: the new map's first keyframe starts from the quantiles.
+  have_right_brightness_ = false;
   initialized_ = false;
   ++segment_;
   reference_id_ = -1;

@@ -9,6 +9,7 @@
 
 #include <memory>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <vector>
 
 #include "core/camera.h"
@@ -105,8 +106,15 @@ class System {
                                                const StereoBrightness& start);
   std::vector<ImmaturePoint> TraceStaticStereo(const std::vector<ImmaturePoint>& points, const ImagePyramid& right,
                                                const StereoBrightness& transfer) const;
-  StereoBrightness FitStereoBrightnessFromMatches(const std::vector<ImmaturePoint>& traced, const ImagePyramid& left,
-                                                  const ImagePyramid& right, const StereoBrightness& fallback) const;
+  // The transfer refitted from a keyframe's unambiguous static stereo matches, with the intensity range
+  // (2nd-98th percentile of the left samples) it was fitted on; none with too few matches.
+  struct MatchedBrightnessFit {
+    StereoBrightness transfer;
+    double low = 0, high = 0;
+  };
+  std::optional<MatchedBrightnessFit> FitStereoBrightnessFromMatches(const std::vector<ImmaturePoint>& traced,
+                                                                     const ImagePyramid& left,
+                                                                     const ImagePyramid& right) const;
   StereoBrightness StartingStereoBrightness(const ImagePyramid& left, const ImagePyramid& right) const;
   void UpdateVirtualStereoStatistics();
   void RunOptimization(FrameEvent* event);
@@ -152,8 +160,8 @@ class System {
   double first_rmse_ = 0;        // rmse of the first frame tracked against the current reference
   double last_rmse_ = 0;
   double activation_cell_ = 0;   // adaptive activation grid cell (pixels)
-  StereoBrightness last_right_brightness_;  // the last stereo keyframe's transfer (next keyframe's start)
-  bool have_right_brightness_ = false;
+  StereoBrightness last_right_brightness_;  // the last stereo keyframe's transfer (reported in FrameEvent)
+  bool have_right_brightness_ = false;      // it was refitted from matches: the next keyframe starts from it
   double selector_block_size_ = 0;  // pixel selector block size that worked for the last keyframe
   int reference_id_ = -1;        // keyframe id the tracker uses
   Eigen::Isometry3d T_last_ref_ = Eigen::Isometry3d::Identity();   // last frame <- reference

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <optional>
 
 #include "core/disparity_conversion.h"
 #include "core/error.h"
@@ -125,39 +126,68 @@ std::vector<ImmaturePoint> System::TraceStaticStereo(const std::vector<ImmatureP
   return traced;
 }
 
-StereoBrightness System::FitStereoBrightnessFromMatches(const std::vector<ImmaturePoint>& traced,
-                                                        const ImagePyramid& left, const ImagePyramid& right,
-                                                        const StereoBrightness& fallback) const {
+std::optional<System::MatchedBrightnessFit> System::FitStereoBrightnessFromMatches(
+    const std::vector<ImmaturePoint>& traced, const ImagePyramid& left, const ImagePyramid& right) const {
   const StereoBrightnessOptions& o = options_.stereo_brightness;
   const PyramidLevel& host = left.level(0);
   const PyramidLevel& target = right.level(0);
+  // Clipped pixels (black or saturated) say nothing about the transfer and would all lie on one side of it.
+  auto extremes = [](const PyramidLevel& level) {
+    float lo = level.data[0][0], hi = lo;
+    for (const Eigen::Vector3f& v : level.data) {
+      lo = std::min(lo, v[0]);
+      hi = std::max(hi, v[0]);
+    }
+    return std::pair{lo, hi};
+  };
+  const auto [host_lo, host_hi] = extremes(host);
+  const auto [right_lo, right_hi] = extremes(target);
+  constexpr float kClipMargin = 0.5f;  // intensity units: within this of an image's extreme = clipped
+  auto unclipped = [&](float h, float r) {
+    return h > host_lo + kClipMargin && h < host_hi - kClipMargin && r > right_lo + kClipMargin &&
+           r < right_hi - kClipMargin;
+  };
   const float fxb = static_cast<float>(camera_.FxB());
   std::vector<double> host_intensity, right_intensity;
   int matched_points = 0;
   for (const ImmaturePoint& p : traced) {
-    // Unambiguous matches only (DSO's activation quality): a repeated texture's
-    // wrong match would compare unrelated pixels.
-    if (p.last_status != TraceStatus::kGood || !p.ReadyForActivation(options_.immature)) continue;
+    // Unambiguous matches only (DSO's activation quality): a repeated texture's wrong match would
+    // compare unrelated pixels. An interval clamped at inverse depth 0 (disparity below the search's
+    // error) is not centred on the match, so its midpoint is not the matched position.
+    if (p.last_status != TraceStatus::kGood || !p.ReadyForActivation(options_.immature) || !(p.idepth_min > 0)) {
+      continue;
+    }
     const float x = p.u - fxb * p.IdepthEstimate();
     // Both images are read half a sub-pixel step off: bilinear interpolation at a fraction t
     // averages neighbours with weight t (1 - t), and reading only the right image between pixels
     // would smooth it alone. Candidates sit at intensity extremes (high gradient), so the smoothed
     // side regresses towards the local mean and the fit finds gain < 1 with identical cameras
     // (0.985, bias +0.6 on a simulated world before this). Read at x - f/2 and u - f/2 (f = frac x),
-    // the two fractions are f/2 and 1 - f/2: the same smoothing on both sides.
+    // the two fractions are f/2 and 1 - f/2: the same amount of smoothing on both sides.
     const float half_fraction = 0.5f * (x - std::floor(x));
     const float xr = x - half_fraction, xl = p.u - half_fraction;
     if (!target.InBounds(xr, p.v, kPatternRadius + 1.5f) || !host.InBounds(xl, p.v, kPatternRadius + 1.5f)) continue;
     ++matched_points;
     for (int k = 0; k < kPatternSize; ++k) {
       const float dx = static_cast<float>(kPatternOffsets[k][0]), dy = static_cast<float>(kPatternOffsets[k][1]);
-      host_intensity.push_back(host.InterpolateIntensity(xl + dx, p.v + dy));
-      right_intensity.push_back(target.InterpolateIntensity(xr + dx, p.v + dy));
+      const float h = host.InterpolateIntensity(xl + dx, p.v + dy);
+      const float r = target.InterpolateIntensity(xr + dx, p.v + dy);
+      if (!unclipped(h, r)) continue;
+      host_intensity.push_back(h);
+      right_intensity.push_back(r);
     }
   }
-  if (matched_points < o.min_matched_points) return fallback;
-  return FitBrightnessTransfer(host_intensity, right_intensity, o.huber_threshold, o.max_gain_ratio)
-      .value_or(fallback);
+  if (matched_points < o.min_matched_points) return std::nullopt;
+  const std::optional<StereoBrightness> transfer =
+      FitBrightnessTransfer(host_intensity, right_intensity, o.huber_threshold, o.max_gain_ratio);
+  if (!transfer) return std::nullopt;
+  // The intensity range the fit speaks for: 2nd to 98th percentile of the left samples.
+  std::vector<double> sorted = host_intensity;
+  const size_t i_lo = sorted.size() / 50, i_hi = sorted.size() - 1 - sorted.size() / 50;
+  std::nth_element(sorted.begin(), sorted.begin() + i_lo, sorted.end());
+  const double low = sorted[i_lo];
+  std::nth_element(sorted.begin(), sorted.begin() + i_hi, sorted.end());
+  return MatchedBrightnessFit{*transfer, low, sorted[i_hi]};
 }
 
 std::vector<ImmaturePoint> System::MatchStaticStereo(int keyframe_id, std::vector<ImmaturePoint> points,
@@ -165,19 +195,24 @@ std::vector<ImmaturePoint> System::MatchStaticStereo(int keyframe_id, std::vecto
                                                      const StereoBrightness& start) {
   const StereoBrightnessOptions& o = options_.stereo_brightness;
   StereoBrightness transfer = start;
+  bool refitted = false;
   std::vector<ImmaturePoint> traced = TraceStaticStereo(points, right, transfer);
   if (o.estimate) {
     // Refit from the matches; match again with the refitted transfer while it moves.
     for (int pass = 1; pass < o.max_matching_passes; ++pass) {
-      const StereoBrightness refit = FitStereoBrightnessFromMatches(traced, left, right, transfer);
-      const bool moved = BrightnessTransferMoved(transfer, refit, o);
-      transfer = refit;
-      if (!moved) break;
+      const std::optional<MatchedBrightnessFit> fit = FitStereoBrightnessFromMatches(traced, left, right);
+      if (!fit) break;  // too few matches or no plausible line: this keyframe keeps its start
+      const double change = BrightnessTransferChange(transfer, fit->transfer, fit->low, fit->high);
+      transfer = fit->transfer;
+      refitted = true;
+      if (change <= o.rematch_change) break;
       traced = TraceStaticStereo(points, right, transfer);
     }
   }
+  // Only a transfer confirmed by matches is the next keyframe's start; otherwise it starts from the quantiles
+  // again (a wrong start would otherwise be handed on from keyframe to keyframe).
   last_right_brightness_ = transfer;
-  have_right_brightness_ = true;
+  have_right_brightness_ = refitted;
   window_->SetRightBrightness(keyframe_id, transfer);
   return traced;
 }
