@@ -113,6 +113,40 @@ TEST(FrontendTracker, HypothesesRecoverFromBadFirstGuess) {
   EXPECT_LT(err.translation().norm(), 0.01);
 }
 
+TEST(FrontendTracker, PointFlowByHand) {
+  // Translation only, along x by 0.1 at inverse depth 0.5: the point moves by
+  // fx * 0.1 * 0.5 pixels in x; the full flow is the same without rotation.
+  const float fx = 700, fy = 690;
+  const Eigen::Vector3f ray(0.2f, -0.1f, 1.0f);
+  PointFlow flow = ComputePointFlow(Eigen::Matrix3f::Identity(), Eigen::Vector3f(0.1f, 0, 0), ray, 0.5f, fx, fy);
+  ASSERT_TRUE(flow.has_full && flow.has_translation);
+  EXPECT_NEAR(flow.sq_translation, (fx * 0.05f) * (fx * 0.05f), 1e-2);
+  EXPECT_NEAR(flow.sq_full, flow.sq_translation, 1e-2);
+  // A rotation that brings the ray onto the optical axis moves the point to the
+  // principal point; the translation-only flow ignores it.
+  const Eigen::Matrix3f R = Eigen::Quaternionf::FromTwoVectors(ray, Eigen::Vector3f::UnitZ()).toRotationMatrix();
+  flow = ComputePointFlow(R, Eigen::Vector3f::Zero(), ray, 0.5f, fx, fy);
+  ASSERT_TRUE(flow.has_full && flow.has_translation);
+  EXPECT_NEAR(flow.sq_full, (fx * 0.2f) * (fx * 0.2f) + (fy * 0.1f) * (fy * 0.1f), 1e-1);
+  EXPECT_EQ(flow.sq_translation, 0.0f);
+}
+
+TEST(FrontendTracker, PointThatTheTranslationAloneMovesBehindTheCameraHasNoTranslationFlow) {
+  // A near point at the image side while the camera drives past it and turns
+  // towards it: with the rotation it stays in front (z = |ray| - 1.05 > 0), by
+  // the translation alone it would be behind (z = 1 - 1.05). DSO divided by that
+  // z and added a huge, sign-flipped flow to the keyframe criterion.
+  const float fx = 700, fy = 690;
+  const Eigen::Vector3f ray(0.6f, 0.0f, 1.0f);
+  const Eigen::Matrix3f R = Eigen::Quaternionf::FromTwoVectors(ray, Eigen::Vector3f::UnitZ()).toRotationMatrix();
+  const Eigen::Vector3f t(0, 0, -1.05f);
+  const PointFlow flow = ComputePointFlow(R, t, ray, 1.0f, fx, fy);
+  EXPECT_TRUE(flow.has_full);
+  EXPECT_FALSE(flow.has_translation);
+  EXPECT_EQ(flow.sq_translation, 0.0f);
+  EXPECT_NEAR(flow.sq_full, (fx * 0.6f) * (fx * 0.6f), 1.0);
+}
+
 TEST(FrontendTracker, WrongImageFailsOrHasHighError) {
   TrackingFixture f;
   cv::Mat noise(f.cam.height, f.cam.width, CV_32F);

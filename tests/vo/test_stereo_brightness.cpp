@@ -163,5 +163,25 @@ TEST(StereoBrightness, ChangeIsMeasuredOverTheIntensitiesThatOccur) {
   EXPECT_EQ(BrightnessTransferChange(a, a, 0, 255), 0.0);
 }
 
+TEST(StereoBrightness, UnclippedRangeExcludesTheDarkestAndBrightestIntensities) {
+  // A ramp from 10 to 250 with a saturated block and a black block: those two, and only those,
+  // fall outside the range.
+  const PinholeCamera camera = SmallCamera(64, 48);
+  const ImagePyramidPtr image = MakePyramid(ImageFromFunction(camera, [](double x, double y) {
+                                              if (x < 8 && y < 8) return 0.f;
+                                              if (x > 55 && y > 39) return 255.f;
+                                              return static_cast<float>(10.0 + 240.0 * x / 63.0);
+                                            }),
+                                            camera);
+  const UnclippedRange range = UnclippedIntensityRange(image->level(0));
+  EXPECT_FLOAT_EQ(range.low, 0.f + UnclippedRange::kClipMargin);
+  EXPECT_FLOAT_EQ(range.high, 255.f - UnclippedRange::kClipMargin);
+  EXPECT_FALSE(range.Contains(0.f));
+  EXPECT_FALSE(range.Contains(0.4f));
+  EXPECT_FALSE(range.Contains(255.f));
+  EXPECT_TRUE(range.Contains(10.f));
+  EXPECT_TRUE(range.Contains(250.f));
+}
+
 }  // namespace
 }  // namespace dvso::vo

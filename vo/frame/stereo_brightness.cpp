@@ -93,6 +93,16 @@ double BrightnessTransferChange(const StereoBrightness& a, const StereoBrightnes
   return std::max(std::abs(dg * low + db), std::abs(dg * high + db));
 }
 
+UnclippedRange UnclippedIntensityRange(const PyramidLevel& level) {
+  Require(!level.data.empty(), "UnclippedIntensityRange: empty image");
+  float lo = level.data[0][0], hi = lo;
+  for (const Eigen::Vector3f& v : level.data) {
+    lo = std::min(lo, v[0]);
+    hi = std::max(hi, v[0]);
+  }
+  return UnclippedRange{lo + UnclippedRange::kClipMargin, hi - UnclippedRange::kClipMargin};
+}
+
 StereoBrightness EstimateStereoBrightness(const PyramidLevel& left, const PyramidLevel& right,
                                           const StereoBrightnessOptions& options) {
   StereoBrightness identity;

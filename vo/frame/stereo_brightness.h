@@ -66,6 +66,16 @@ std::optional<StereoBrightness> FitBrightnessTransfer(const std::vector<double>&
 // comparing them one by one would compare extrapolations to intensity 0).
 double BrightnessTransferChange(const StereoBrightness& a, const StereoBrightness& b, double low, double high);
 
+// The open intensity interval of an image's pixels that are not clipped: its darkest and brightest
+// level-0 intensities, each moved inwards by kClipMargin. A black or saturated pixel says nothing
+// about the transfer (all of them lie on one side of the line), so the match fit leaves them out.
+struct UnclippedRange {
+  static constexpr float kClipMargin = 0.5f;  // intensity units: within this of an image's extreme = clipped
+  float low = 0, high = 0;
+  bool Contains(float intensity) const { return intensity > low && intensity < high; }
+};
+UnclippedRange UnclippedIntensityRange(const PyramidLevel& level);
+
 // The transfer of the pair (left, right) from quantiles, both level 0 of their pyramids (same size).
 // Returns the identity when options.estimate is false, when too few quantile
 // levels are usable (flat images), or when the fitted gain is implausible.

@@ -22,6 +22,27 @@ void CoarseTrackerOptions::Check() const {
   Require(retrack_ratio >= 1, "tracker retrack_ratio must be >= 1");
 }
 
+PointFlow ComputePointFlow(const Eigen::Matrix3f& R, const Eigen::Vector3f& t, const Eigen::Vector3f& ray,
+                           float idepth, float fx, float fy) {
+  PointFlow flow;
+  // Both projections are of the point scaled by idepth: q = idepth * (R X + t).
+  const Eigen::Vector3f q_full = R * ray + t * idepth;
+  const Eigen::Vector3f q_translation = ray + t * idepth;
+  const auto squared_shift = [&](const Eigen::Vector3f& q) {
+    const float du = fx * (q.x() / q.z() - ray.x()), dv = fy * (q.y() / q.z() - ray.y());
+    return du * du + dv * dv;
+  };
+  if (q_full.z() > kMinProjectedDepth) {
+    flow.has_full = true;
+    flow.sq_full = squared_shift(q_full);
+  }
+  if (q_translation.z() > kMinProjectedDepth) {
+    flow.has_translation = true;
+    flow.sq_translation = squared_shift(q_translation);
+  }
+  return flow;
+}
+
 CoarseTracker::CoarseTracker(const CoarseTrackerOptions& options) : options_(options) { options_.Check(); }
 
 int CoarseTracker::num_reference_points(int level) const {
@@ -88,7 +109,7 @@ CoarseTracker::LevelStats CoarseTracker::Evaluate(const PyramidLevel& target, in
   for (const LevelPoint& p : level_points_[level]) {
     const Eigen::Vector3f ray((p.u - cx) * ifx, (p.v - cy) * ify, 1.0f);
     const Eigen::Vector3f q = R * ray + t * p.idepth;  // point scaled by idepth
-    if (!(q.z() > 1e-6f)) continue;
+    if (!(q.z() > kMinProjectedDepth)) continue;
     const float iz = 1.0f / q.z();
     const float un = q.x() * iz, vn = q.y() * iz;
     const float u = fx * un + cx, v = fy * vn + cy;
@@ -100,10 +121,12 @@ CoarseTracker::LevelStats CoarseTracker::Evaluate(const PyramidLevel& target, in
     const float ar = std::fabs(r);
     ++stats.num;
     if (want_flow) {
-      const Eigen::Vector3f qt = ray + t * p.idepth;
-      const float ut = fx * qt.x() / qt.z() + cx - p.u, vt = fy * qt.y() / qt.z() + cy - p.v;
-      stats.flow_sq_t += ut * ut + vt * vt;
-      stats.flow_sq_rt += (u - p.u) * (u - p.u) + (v - p.v) * (v - p.v);
+      const PointFlow flow = ComputePointFlow(R, t, ray, p.idepth, fx, fy);
+      stats.flow_sq_rt += flow.sq_full;
+      if (flow.has_translation) {
+        stats.flow_sq_t += flow.sq_translation;
+        ++stats.num_flow_t;
+      }
     }
     if (ar > cutoff) {
       stats.energy += wg * huber * (2 * cutoff - huber);
@@ -207,7 +230,7 @@ TrackingResult CoarseTracker::Track(const ImagePyramid& frame, const Eigen::Isom
   if (stats.num > 0) {
     result.rmse = std::sqrt(stats.energy / stats.num);
     result.inlier_fraction = static_cast<double>(stats.num_inliers) / stats.num;
-    result.flow_sq_t = stats.flow_sq_t / stats.num;
+    result.flow_sq_t = stats.num_flow_t > 0 ? stats.flow_sq_t / stats.num_flow_t : 0.0;
     result.flow_sq_rt = stats.flow_sq_rt / stats.num;
   }
   result.success = stats.num >= options_.min_points && result.inlier_fraction >= options_.min_inlier_fraction &&

@@ -30,6 +30,23 @@ struct CoarseTrackerOptions {
   void Check() const;
 };
 
+// Squared optical flow (pixels^2) of one reference point, the inputs of DSO's
+// keyframe criteria: under the full motion (rotation + translation) and under
+// the translation alone. `ray` = ((u - cx) / fx, (v - cy) / fy, 1) of the point
+// at (u, v) with inverse depth `idepth`; T maps reference-camera points into
+// the new camera. A point that the translation alone would move behind the
+// camera (z <= kMinProjectedDepth) has no translation-only flow: DSO divides
+// by that z unchecked and adds a huge or sign-flipped value.
+struct PointFlow {
+  bool has_full = false;         // the full motion keeps the point in front of the camera
+  bool has_translation = false;  // the translation alone keeps it in front
+  float sq_full = 0;
+  float sq_translation = 0;
+};
+inline constexpr float kMinProjectedDepth = 1e-6f;  // projected z (scaled by idepth) below this = behind the camera
+PointFlow ComputePointFlow(const Eigen::Matrix3f& R, const Eigen::Vector3f& t, const Eigen::Vector3f& ray,
+                           float idepth, float fx, float fy);
+
 // One reference point at level 0 of the reference keyframe.
 struct ReferencePoint {
   float u = 0;       // pixel x, level 0
@@ -100,6 +117,7 @@ class CoarseTracker {
     double energy = 0;
     int num = 0;
     int num_inliers = 0;
+    int num_flow_t = 0;  // points with a translation-only flow (ComputePointFlow)
     double flow_sq_t = 0;
     double flow_sq_rt = 0;
   };

@@ -107,14 +107,17 @@ class System {
   std::vector<ImmaturePoint> TraceStaticStereo(const std::vector<ImmaturePoint>& points, const ImagePyramid& right,
                                                const StereoBrightness& transfer) const;
   // The transfer refitted from a keyframe's unambiguous static stereo matches, with the intensity range
-  // (2nd-98th percentile of the left samples) it was fitted on; none with too few matches.
+  // (2nd-98th percentile of the left samples) it was fitted on; none with too few matches. Samples
+  // outside either image's unclipped range are left out.
   struct MatchedBrightnessFit {
     StereoBrightness transfer;
     double low = 0, high = 0;
   };
   std::optional<MatchedBrightnessFit> FitStereoBrightnessFromMatches(const std::vector<ImmaturePoint>& traced,
                                                                      const ImagePyramid& left,
-                                                                     const ImagePyramid& right) const;
+                                                                     const ImagePyramid& right,
+                                                                     const UnclippedRange& left_unclipped,
+                                                                     const UnclippedRange& right_unclipped) const;
   StereoBrightness StartingStereoBrightness(const ImagePyramid& left, const ImagePyramid& right) const;
   void UpdateVirtualStereoStatistics();
   void RunOptimization(FrameEvent* event);

@@ -127,26 +127,11 @@ std::vector<ImmaturePoint> System::TraceStaticStereo(const std::vector<ImmatureP
 }
 
 std::optional<System::MatchedBrightnessFit> System::FitStereoBrightnessFromMatches(
-    const std::vector<ImmaturePoint>& traced, const ImagePyramid& left, const ImagePyramid& right) const {
+    const std::vector<ImmaturePoint>& traced, const ImagePyramid& left, const ImagePyramid& right,
+    const UnclippedRange& left_unclipped, const UnclippedRange& right_unclipped) const {
   const StereoBrightnessOptions& o = options_.stereo_brightness;
   const PyramidLevel& host = left.level(0);
   const PyramidLevel& target = right.level(0);
-  // Clipped pixels (black or saturated) say nothing about the transfer and would all lie on one side of it.
-  auto extremes = [](const PyramidLevel& level) {
-    float lo = level.data[0][0], hi = lo;
-    for (const Eigen::Vector3f& v : level.data) {
-      lo = std::min(lo, v[0]);
-      hi = std::max(hi, v[0]);
-    }
-    return std::pair{lo, hi};
-  };
-  const auto [host_lo, host_hi] = extremes(host);
-  const auto [right_lo, right_hi] = extremes(target);
-  constexpr float kClipMargin = 0.5f;  // intensity units: within this of an image's extreme = clipped
-  auto unclipped = [&](float h, float r) {
-    return h > host_lo + kClipMargin && h < host_hi - kClipMargin && r > right_lo + kClipMargin &&
-           r < right_hi - kClipMargin;
-  };
   const float fxb = static_cast<float>(camera_.FxB());
   std::vector<double> host_intensity, right_intensity;
   int matched_points = 0;
@@ -172,7 +157,8 @@ std::optional<System::MatchedBrightnessFit> System::FitStereoBrightnessFromMatch
       const float dx = static_cast<float>(kPatternOffsets[k][0]), dy = static_cast<float>(kPatternOffsets[k][1]);
       const float h = host.InterpolateIntensity(xl + dx, p.v + dy);
       const float r = target.InterpolateIntensity(xr + dx, p.v + dy);
-      if (!unclipped(h, r)) continue;
+      // Clipped pixels (black or saturated) would all lie on one side of the line.
+      if (!left_unclipped.Contains(h) || !right_unclipped.Contains(r)) continue;
       host_intensity.push_back(h);
       right_intensity.push_back(r);
     }
@@ -198,9 +184,12 @@ std::vector<ImmaturePoint> System::MatchStaticStereo(int keyframe_id, std::vecto
   bool refitted = false;
   std::vector<ImmaturePoint> traced = TraceStaticStereo(points, right, transfer);
   if (o.estimate) {
+    const UnclippedRange left_unclipped = UnclippedIntensityRange(left.level(0));
+    const UnclippedRange right_unclipped = UnclippedIntensityRange(right.level(0));
     // Refit from the matches; match again with the refitted transfer while it moves.
     for (int pass = 1; pass < o.max_matching_passes; ++pass) {
-      const std::optional<MatchedBrightnessFit> fit = FitStereoBrightnessFromMatches(traced, left, right);
+      const std::optional<MatchedBrightnessFit> fit =
+          FitStereoBrightnessFromMatches(traced, left, right, left_unclipped, right_unclipped);
       if (!fit) break;  // too few matches or no plausible line: this keyframe keeps its start
       const double change = BrightnessTransferChange(transfer, fit->transfer, fit->low, fit->high);
       transfer = fit->transfer;
