@@ -6,7 +6,9 @@
 #include <Eigen/Dense>
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <cmath>
 
+#include "core/error.h"
 #include "tests/vo/test_backend_util.h"
 #include "vo/optimization/accumulator.h"
 #include "vo/optimization/marginalization.h"
@@ -209,6 +211,28 @@ TEST(BackendMarginalization, KeyframeSelectionKeepsNewestAndWindowSize) {
   // The window still optimises with the prior in place.
   const OptimizationSummary s = sw.window->Optimize(3);
   EXPECT_LE(s.final_energy, s.initial_energy);
+}
+
+TEST(BackendMarginalization, DistanceScoreByHand) {
+  // Camera centres on a line at x = 0, 1, 2 and the newest at 10 (world_to_camera translation = -c).
+  std::vector<Eigen::Isometry3d> poses;
+  for (double x : {0.0, 1.0, 2.0, 10.0}) {
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.translation() = Eigen::Vector3d(-x, 0, 0);
+    poses.push_back(T);
+  }
+  std::vector<bool> leaving(4, false);
+  // sqrt(d(i, newest)) * sum over the other older keyframes (the newest is not in the sum).
+  EXPECT_NEAR(MarginalizationDistanceScore(poses, leaving, 0), std::sqrt(10.0) * (1.0 + 0.5), 1e-4);
+  EXPECT_NEAR(MarginalizationDistanceScore(poses, leaving, 1), 3.0 * (1.0 + 1.0), 1e-4);
+  EXPECT_NEAR(MarginalizationDistanceScore(poses, leaving, 2), std::sqrt(8.0) * (0.5 + 1.0), 1e-4);
+  // A keyframe already leaving no longer counts; a rotation does not change distances.
+  leaving[1] = true;
+  EXPECT_NEAR(MarginalizationDistanceScore(poses, leaving, 0), std::sqrt(10.0) * 0.5, 1e-4);
+  poses[2].linear() = Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  poses[2].translation() = -(poses[2].linear() * Eigen::Vector3d(2, 0, 0));
+  EXPECT_NEAR(MarginalizationDistanceScore(poses, leaving, 2), std::sqrt(8.0) * 0.5, 1e-4);
+  EXPECT_THROW(MarginalizationDistanceScore(poses, leaving, 3), Error);  // the newest never leaves
 }
 
 TEST(BackendMarginalization, KeyframeThatLostItsPointsLeavesFirst) {

@@ -11,7 +11,7 @@
 // minimised by Levenberg-Marquardt with the inverse depths eliminated by the
 // Schur complement (see optimizer.cpp).
 //
-// Conventions (see /work/notes/vo_interface.md):
+// Conventions:
 //  - Poses are stored world-to-camera (T_cw: X_cam = T_cw * X_world); use
 //    CameraToWorld() for output. Updates are left-multiplied twists [v; w]
 //    (core/lie.h): T_cw <- Exp(xi) * T_cw.
@@ -164,6 +164,20 @@ struct OptimizationSummary {
   int num_active_residuals = 0;         // residual (point, target) pairs used in the last linearisation
   double total_ms = 0.0;                // wall time of Optimize()
 };
+
+// DSO's distance score for choosing which keyframe leaves the window
+// (FullSystem::flagFramesForMarginalization): with d(i, j) the distance between the
+// camera centres of keyframes i and j,
+//   score_i = sqrt(d(i, newest) + eps) * sum_{j != i, j != newest, j staying} 1 / (d(i, j) + eps).
+// The largest score leaves first: a keyframe close to others (the sum) but far from the
+// newest (the root) adds least. DSO's sum also counts the newest keyframe; measured in
+// session 28 (README status table) that was better for stereo (t_rel -0.001 to -0.009
+// points on 4 sequences) but worse for DVSO with exact disparities (+0.002 to +0.010 on 3
+// of 4, equal on 1) and for mono on 3 of 4, so the newest stays out of the sum.
+// `world_to_camera`: the window's keyframes, oldest first; `leaving[j]`: j is already
+// chosen to leave and no longer counts.
+double MarginalizationDistanceScore(const std::vector<Eigen::Isometry3d>& world_to_camera,
+                                    const std::vector<bool>& leaving, int i);
 
 class Window {
  public:

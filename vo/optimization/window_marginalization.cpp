@@ -4,7 +4,7 @@
 // keyframe no longer observes leave earlier, on their own (DSO
 // flagPointsForRemoval), the same way.
 //
-// Simplifications w.r.t. DSO (documented in vo_interface.md):
+// Simplifications w.r.t. DSO (the options are in window.h):
 //  - a hosted point is marginalised when it still has at least
 //    options.min_residuals_to_marginalize active temporal residuals,
 //    otherwise dropped (it carries no information on the remaining frames);
@@ -170,6 +170,22 @@ std::vector<MarginalizedPoint> Window::MarginalizeKeyframe(int id) {
   return leaving;
 }
 
+double MarginalizationDistanceScore(const std::vector<Eigen::Isometry3d>& world_to_camera,
+                                    const std::vector<bool>& leaving, int i) {
+  constexpr double kDistanceEps = 1e-5;  // m: keeps coincident keyframes finite
+  const int n = static_cast<int>(world_to_camera.size());
+  Require(i >= 0 && i + 1 < n && static_cast<int>(leaving.size()) == n,
+          "MarginalizationDistanceScore: keyframe index out of range");
+  // |translation of T_i T_j^-1| = |R_i (c_j - c_i)| = distance between the camera centres.
+  const auto distance = [&](int j) { return (world_to_camera[i] * world_to_camera[j].inverse()).translation().norm(); };
+  double sum = 0.0;
+  for (int j = 0; j + 1 < n; ++j) {
+    if (j == i || leaving[j]) continue;
+    sum += 1.0 / (distance(j) + kDistanceEps);
+  }
+  return std::sqrt(distance(n - 1) + kDistanceEps) * sum;
+}
+
 std::vector<int> Window::KeyframesToMarginalize() const {
   std::vector<int> result;
   const int n = num_keyframes();
@@ -187,22 +203,16 @@ std::vector<int> Window::KeyframesToMarginalize() const {
       --remaining;
     }
   }
-  // Distance heuristic (DSO): keep keyframes spread out in space while
-  // keeping those close to the newest; score_i = sqrt(d(i, newest)) *
-  // sum_j 1 / (d(i, j) + eps), the largest score leaves first.
-  const Eigen::Isometry3d& newest = keyframes_.back().world_to_camera;
+  // Distance heuristic (DSO), MarginalizationDistanceScore: the largest score leaves first.
+  std::vector<Eigen::Isometry3d> poses;
+  poses.reserve(n);
+  for (const Keyframe& kf : keyframes_) poses.push_back(kf.world_to_camera);
   while (remaining > options_.max_keyframes - 1) {
     int best = -1;
     double best_score = -1.0;
     for (int i = 0; i + 1 < n; ++i) {
       if (flagged[i]) continue;
-      const Eigen::Isometry3d& Ti = keyframes_[i].world_to_camera;
-      double sum = 0.0;
-      for (int j = 0; j + 1 < n; ++j) {
-        if (j == i || flagged[j]) continue;
-        sum += 1.0 / ((Ti * keyframes_[j].world_to_camera.inverse()).translation().norm() + 1e-5);
-      }
-      const double score = std::sqrt((Ti * newest.inverse()).translation().norm() + 1e-5) * sum;
+      const double score = MarginalizationDistanceScore(poses, flagged, i);
       if (score > best_score) {
         best_score = score;
         best = i;
