@@ -122,7 +122,7 @@ CoarseTracker::LevelStats CoarseTracker::Evaluate(const PyramidLevel& target, in
     ++stats.num;
     if (want_flow) {
       const PointFlow flow = ComputePointFlow(R, t, ray, p.idepth, fx, fy);
-      stats.flow_sq_rt += flow.sq_full;
+      if (flow.has_full) stats.flow_sq_rt += flow.sq_full;  // q.z() > kMinProjectedDepth was checked above
       if (flow.has_translation) {
         stats.flow_sq_t += flow.sq_translation;
         ++stats.num_flow_t;
@@ -230,6 +230,7 @@ TrackingResult CoarseTracker::Track(const ImagePyramid& frame, const Eigen::Isom
   if (stats.num > 0) {
     result.rmse = std::sqrt(stats.energy / stats.num);
     result.inlier_fraction = static_cast<double>(stats.num_inliers) / stats.num;
+    // Mean over the points that have a translation-only flow (ComputePointFlow); none: no shift.
     result.flow_sq_t = stats.num_flow_t > 0 ? stats.flow_sq_t / stats.num_flow_t : 0.0;
     result.flow_sq_rt = stats.flow_sq_rt / stats.num;
   }

@@ -165,15 +165,18 @@ struct OptimizationSummary {
   double total_ms = 0.0;                // wall time of Optimize()
 };
 
-// DSO's distance score for choosing which keyframe leaves the window
+// The distance score for choosing which keyframe leaves the window, after DSO
 // (FullSystem::flagFramesForMarginalization): with d(i, j) the distance between the
 // camera centres of keyframes i and j,
 //   score_i = sqrt(d(i, newest) + eps) * sum_{j != i, j != newest, j staying} 1 / (d(i, j) + eps).
 // The largest score leaves first: a keyframe close to others (the sum) but far from the
-// newest (the root) adds least. DSO's sum also counts the newest keyframe; measured in
-// session 28 (README status table) that was better for stereo (t_rel -0.001 to -0.009
-// points on 4 sequences) but worse for DVSO with exact disparities (+0.002 to +0.010 on 3
-// of 4, equal on 1) and for mono on 3 of 4, so the newest stays out of the sum.
+// newest (the root) adds least. Differences from DSO: DSO's sum also counts the newest
+// keyframe and the keyframes already flagged to leave, DSO flags at most one keyframe by
+// this score per new keyframe (KeyframesToMarginalize flags as many as needed to make room)
+// and never the first keyframe ever, and it has no eps under the root. Counting the newest,
+// measured in session 28 (README status table, one run each, differences of at most 0.01
+// points of t_rel): better for stereo on 4 of 4 sequences, worse for DVSO with exact
+// disparities on 3 of 4 (equal on 1) and for mono on 3 of 4, so the newest stays out.
 // `world_to_camera`: the window's keyframes, oldest first; `leaving[j]`: j is already
 // chosen to leave and no longer counts.
 double MarginalizationDistanceScore(const std::vector<Eigen::Isometry3d>& world_to_camera,

@@ -205,8 +205,10 @@ std::vector<int> Window::KeyframesToMarginalize() const {
   }
   // Distance heuristic (DSO), MarginalizationDistanceScore: the largest score leaves first.
   std::vector<Eigen::Isometry3d> poses;
-  poses.reserve(n);
-  for (const Keyframe& kf : keyframes_) poses.push_back(kf.world_to_camera);
+  if (remaining > options_.max_keyframes - 1) {
+    poses.reserve(n);
+    for (const Keyframe& kf : keyframes_) poses.push_back(kf.world_to_camera);
+  }
   while (remaining > options_.max_keyframes - 1) {
     int best = -1;
     double best_score = -1.0;

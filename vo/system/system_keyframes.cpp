@@ -183,7 +183,7 @@ std::vector<ImmaturePoint> System::MatchStaticStereo(int keyframe_id, std::vecto
   StereoBrightness transfer = start;
   bool refitted = false;
   std::vector<ImmaturePoint> traced = TraceStaticStereo(points, right, transfer);
-  if (o.estimate) {
+  if (o.estimate && o.max_matching_passes > 1) {
     const UnclippedRange left_unclipped = UnclippedIntensityRange(left.level(0));
     const UnclippedRange right_unclipped = UnclippedIntensityRange(right.level(0));
     // Refit from the matches; match again with the refitted transfer while it moves.
