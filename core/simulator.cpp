@@ -32,6 +32,7 @@ void SimulatorOptions::Check() const {
   Require(right_gain >= 0.5 && right_gain <= 2, "right gain must be in [0.5, 2]");
   Require(std::abs(right_bias) <= 40, "right bias must be in [-40, 40] grey levels");
   Require(vignetting_strength >= 0 && vignetting_strength < 1, "vignetting strength must be in [0, 1)");
+  Require(right_vignetting_strength < 1, "right vignetting strength must be in [0, 1) (< 0: the left one's)");
   Require(noise_sigma >= 0 && noise_sigma < 50, "noise sigma must be in [0, 50) grey levels");
   Require(num_threads >= 1 && num_threads <= 64, "threads must be in [1, 64]");
   Require(texture_size >= 64 && texture_size <= 4096 && (texture_size & (texture_size - 1)) == 0,
@@ -128,7 +129,10 @@ sim::Photometric StreetSimulator::Exposure(int i, int view) const {
     p.gain *= options_.right_gain;
     p.bias += options_.right_bias;
   }
-  p.vignetting_strength = options_.vignetting ? options_.vignetting_strength : 0.0;
+  const bool own_right_vignetting = view == 1 && options_.right_vignetting_strength >= 0;
+  p.vignetting_strength = !options_.vignetting   ? 0.0
+                          : own_right_vignetting ? options_.right_vignetting_strength
+                                                 : options_.vignetting_strength;
   p.noise_sigma = options_.noise ? options_.noise_sigma : 0.0;
   p.noise_seed = (options_.seed * 0x9E3779B97F4A7C15ull) ^ (static_cast<uint64_t>(i) * 2 + view + 1) * 0xD1B54A32D192ED03ull;
   return p;

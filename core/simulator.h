@@ -47,6 +47,9 @@ struct SimulatorOptions {
   double right_bias = 0.0;          // extra brightness offset of the right camera (grey levels)
   bool vignetting = true;           // radial fall-off V(r) = 1 - strength (r / r_corner)^2
   double vignetting_strength = 0.3; // fall-off at the image corners
+  // The right camera's own fall-off (lenses and sensors of a rig differ; a radial difference is what an
+  // affine brightness transfer between the two images cannot absorb); < 0 = the left one's.
+  double right_vignetting_strength = -1;
   bool noise = true;                // additive Gaussian sensor noise
   double noise_sigma = 1.5;         // noise std (grey levels)
   bool color = false;               // also render image_2/ image_3/ (colour)

@@ -63,7 +63,7 @@ void WriteSimulationYaml(const std::string& path, const StreetSimulator& simulat
         << "\nexposure_max: " << o.exposure_max << "\nbias_sigma: " << o.bias_sigma << "\n";
     out << "right_gain: " << o.right_gain << "\nright_bias: " << o.right_bias << "\n";
     out << "vignetting: " << (o.vignetting ? "true" : "false") << "\nvignetting_strength: " << o.vignetting_strength
-        << "\n";
+        << "\nright_vignetting_strength: " << o.right_vignetting_strength << "\n";
     out << "noise: " << (o.noise ? "true" : "false") << "\nnoise_sigma: " << o.noise_sigma << "\n";
     out << "color: " << (o.color ? "true" : "false") << "\nedge_antialiasing: " << (o.edge_antialiasing ? "true" : "false")
         << "\n";

@@ -75,6 +75,8 @@ void Run(SimulateArgs& args) {
   };
   for (const ValueOfSwitchedOffEffect& v : {ValueOfSwitchedOffEffect{"--noise-sigma", "--no-noise", args.no_noise},
                                             ValueOfSwitchedOffEffect{"--vignetting", "--no-vignetting", args.no_vignetting},
+                                            ValueOfSwitchedOffEffect{"--right-vignetting", "--no-vignetting",
+                                                                     args.no_vignetting},
                                             ValueOfSwitchedOffEffect{"--exposure-sigma", "--no-exposure-drift",
                                                                      args.no_exposure}}) {
     Require(!(v.off && given(v.option)), std::string(v.option) + " has no effect with " + v.off_flag);
@@ -156,6 +158,8 @@ void AddSimulateCommand(CLI::App& app) {
   cmd->add_flag("--no-vignetting", args->no_vignetting, "no vignetting");
   cmd->add_option("--vignetting", o.vignetting_strength, "vignetting fall-off at the corners (0..1)")
       ->capture_default_str();
+  cmd->add_option("--right-vignetting", o.right_vignetting_strength,
+                  "the right camera's own fall-off at the corners (0..1; default: the left one's)");
   cmd->add_flag("--no-noise", args->no_noise, "no sensor noise");
   cmd->add_option("--noise-sigma", o.noise_sigma, "sensor noise std (grey levels)")->capture_default_str();
   cmd->add_flag("--color", o.color, "also write colour images image_2/ image_3/");

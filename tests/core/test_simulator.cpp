@@ -273,6 +273,40 @@ TEST(Simulator, RightCameraGainAndBiasChangeOnlyTheRightImage) {
   EXPECT_EQ(off, 0);
 }
 
+TEST(Simulator, RightCameraVignettingChangesOnlyTheRightImageByItsFallOff) {
+  SimulatorOptions o = SmallOptions(160, 48);
+  o.num_frames = 1;
+  o.noise = false;
+  o.vignetting = true;  // 0.3 in both cameras
+  const SimulatedFrame same = StreetSimulator(o).Render(0);
+  o.right_vignetting_strength = 0.0;  // the right camera without fall-off, the left one keeps 0.3
+  const SimulatedFrame flat = StreetSimulator(o).Render(0);
+  EXPECT_EQ(cv::norm(same.left.grey, flat.left.grey, cv::NORM_INF), 0);
+  // I = clamp(k * V(x) * L + b): without the fall-off the right image is I' = (I - b) / V(x) + b, so the
+  // centre stays and the corners brighten by up to 1 / 0.7.
+  const sim::Photometric p = StreetSimulator(o).Exposure(0, 1);
+  EXPECT_EQ(p.vignetting_strength, 0.0);
+  EXPECT_EQ(StreetSimulator(o).Exposure(0, 0).vignetting_strength, o.vignetting_strength);
+  const PinholeCamera& c = o.camera.left;
+  const double half_diagonal_sq = 0.25 * (c.width * c.width + c.height * c.height);
+  int compared = 0, off = 0, brighter_corners = 0;
+  for (int y = 0; y < same.right.grey.rows; ++y) {
+    for (int x = 0; x < same.right.grey.cols; ++x) {
+      const double r2 = (x - c.cx) * (x - c.cx) + (y - c.cy) * (y - c.cy);
+      const double v = 1.0 - o.vignetting_strength * r2 / half_diagonal_sq;
+      const double expected = (same.right.grey.at<uint8_t>(y, x) - p.bias) / v + p.bias;
+      if (expected > 250 || same.right.grey.at<uint8_t>(y, x) < 5) continue;  // clipped
+      ++compared;
+      const int got = flat.right.grey.at<uint8_t>(y, x);
+      off += std::abs(got - expected) > 0.5 / v + 0.5 + 1e-9;  // both rounded to 8 bits
+      if (r2 > 0.8 * half_diagonal_sq) brighter_corners += got > same.right.grey.at<uint8_t>(y, x);
+    }
+  }
+  EXPECT_GT(compared, static_cast<int>(same.right.grey.total() / 2));
+  EXPECT_EQ(off, 0);
+  EXPECT_GT(brighter_corners, 20);
+}
+
 TEST(Simulator, RejectsBadOptions) {
   auto expect_error = [](const std::function<void(SimulatorOptions&)>& change) {
     SimulatorOptions o = SmallOptions(160, 48);
@@ -287,6 +321,7 @@ TEST(Simulator, RejectsBadOptions) {
   expect_error([](SimulatorOptions& o) { o.trajectory_path = "/nonexistent/poses.txt"; });
   expect_error([](SimulatorOptions& o) { o.texture_size = 300; });
   expect_error([](SimulatorOptions& o) { o.noise_sigma = -1; });
+  expect_error([](SimulatorOptions& o) { o.right_vignetting_strength = 1.0; });
   expect_error([](SimulatorOptions& o) { o.camera.baseline = 0; });
   expect_error([](SimulatorOptions& o) { o.camera.left.width = 8; });
   expect_error([](SimulatorOptions& o) { o.scene.building_density = 1.5; });
