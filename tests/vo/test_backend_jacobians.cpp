@@ -232,6 +232,24 @@ TEST(BackendJacobians, StaticStereoFollowsTheRightCamerasBrightnessTransfer) {
   EXPECT_EQ(analytic.leftCols<16>().norm(), 0.0);
   EXPECT_LT((analytic.col(16) - numeric.col(16)).norm(), 0.1 * numeric.col(16).norm());
   EXPECT_THROW(w.window->SetRightBrightness(0, StereoBrightness{0.0, 0.0}), Error);
+  // With a radial term the gain is gain * (1 + radial rho^2) at each host pattern pixel; the Jacobians
+  // do not change (the scale depends on no parameter).
+  const StereoBrightness radial{1.2, 5.0, 0.3};
+  f.window->SetRightBrightness(0, radial);
+  const Residuals rr = R(f, ResidualKind::kStaticStereo);
+  const RadialPosition rho(f.camera.left.cx, f.camera.left.cy, f.camera.left.width, f.camera.left.height);
+  for (int k = 0; k < kPatternSize; ++k) {
+    const double u = p.u + kPatternOffsets[k][0], v = p.v + kPatternOffsets[k][1];
+    const double u_right = u - f.camera.left.fx * f.camera.baseline * p.idepth;
+    const double expected = (Ramp(u_right + 7.3, v) - radial.bias) - radial.gain * (1 + 0.3 * rho.Sq(u, v)) * Ramp(u, v);
+    EXPECT_NEAR(rr(k), expected, 3e-3);
+    EXPECT_GT(std::abs(rr(k) - r(k)), 0.3 * rho.Sq(u, v) * 1.2 * Ramp(u, v) - 0.01);  // the term is used
+  }
+  w.window->SetRightBrightness(0, radial);
+  const auto numeric_radial = NumericJacobian(w, ResidualKind::kStaticStereo);
+  const auto analytic_radial = AnalyticJacobian(w, ResidualKind::kStaticStereo);
+  EXPECT_LT((analytic_radial.col(16) - numeric_radial.col(16)).norm(), 0.1 * numeric_radial.col(16).norm());
+  EXPECT_THROW(w.window->SetRightBrightness(0, StereoBrightness{1.0, 0.0, -1.5}), Error);
 }
 
 TEST(BackendJacobians, VirtualStereoValueMatchesEq58) {

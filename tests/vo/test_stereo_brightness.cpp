@@ -152,6 +152,9 @@ TEST(StereoBrightness, OptionsAreChecked) {
   o = {};
   o.max_matching_passes = 0;
   EXPECT_THROW(o.Check(), Error);
+  o = {};
+  o.max_radial = 1.0;
+  EXPECT_THROW(o.Check(), Error);
 }
 
 TEST(StereoBrightness, ChangeIsMeasuredOverTheIntensitiesThatOccur) {
@@ -181,6 +184,45 @@ TEST(StereoBrightness, UnclippedRangeExcludesTheDarkestAndBrightestIntensities) 
   EXPECT_FALSE(range.Contains(255.f));
   EXPECT_TRUE(range.Contains(10.f));
   EXPECT_TRUE(range.Contains(250.f));
+}
+
+TEST(StereoBrightness, RadialFitRecoversAVignettingDifference) {
+  // y = 1.1 (1 + 0.25 rho^2) x - 3 + noise: a right lens whose corners are 25 % brighter relative to the left.
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> intensity(20, 200), position(0, 1);
+  std::normal_distribution<double> noise(0, 1.0);
+  std::vector<double> x, y, rho_sq, y_flat;
+  for (int i = 0; i < 4000; ++i) {
+    x.push_back(intensity(rng));
+    rho_sq.push_back(position(rng));
+    y.push_back(1.1 * (1 + 0.25 * rho_sq.back()) * x.back() - 3 + noise(rng));
+    y_flat.push_back(1.1 * x.back() - 3 + noise(rng));
+  }
+  const std::optional<StereoBrightness> t = FitRadialBrightnessTransfer(x, y, rho_sq, 4.0, 3.0, 0.8);
+  ASSERT_TRUE(t.has_value());
+  EXPECT_NEAR(t->gain, 1.1, 0.01);
+  EXPECT_NEAR(t->radial, 0.25, 0.01);
+  EXPECT_NEAR(t->bias, -3, 1.0);
+  EXPECT_NEAR(t->Gain(1.0), 1.1 * 1.25, 0.01);
+  // The line fit alone leaves a position-dependent error of up to 1.1 * 0.25 * 200 / 2 grey levels.
+  const std::optional<StereoBrightness> line = FitBrightnessTransfer(x, y, 4.0, 3.0);
+  ASSERT_TRUE(line.has_value());
+  EXPECT_EQ(line->radial, 0.0);
+  // Without a difference the radial term stays near 0; beyond max_radial the fit is refused.
+  const std::optional<StereoBrightness> flat = FitRadialBrightnessTransfer(x, y_flat, rho_sq, 4.0, 3.0, 0.8);
+  ASSERT_TRUE(flat.has_value());
+  EXPECT_NEAR(flat->radial, 0.0, 0.005);
+  EXPECT_NEAR(flat->gain, 1.1, 0.005);
+  EXPECT_FALSE(FitRadialBrightnessTransfer(x, y, rho_sq, 4.0, 3.0, 0.2).has_value());
+}
+
+TEST(StereoBrightness, RadialPositionIsZeroAtThePrincipalPointAndOneInTheCorners) {
+  const RadialPosition rho(320.0, 240.0, 640, 480);
+  EXPECT_EQ(rho.Sq(320.0, 240.0), 0.0);
+  EXPECT_NEAR(rho.Sq(0.0, 0.0), 1.0, 1e-12);
+  EXPECT_NEAR(rho.Sq(640.0, 240.0), 320.0 * 320.0 / (400.0 * 400.0), 1e-12);
+  // The change between two transfers is taken over the corners too: radial 0.1 at I = 100 is 10.
+  EXPECT_NEAR(BrightnessTransferChange({1.0, 0.0, 0.0}, {1.0, 0.0, 0.1}, 50, 100), 10.0, 1e-12);
 }
 
 }  // namespace

@@ -1,5 +1,6 @@
 #include "vo/frame/stereo_brightness.h"
 
+#include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
 #include <vector>
@@ -43,6 +44,7 @@ void StereoBrightnessOptions::Check() const {
   Require(min_matched_points >= 3, "stereo_brightness.min_matched_points must be >= 3");
   Require(max_matching_passes >= 1, "stereo_brightness.max_matching_passes must be >= 1");
   Require(rematch_change > 0, "stereo_brightness.rematch_change must be > 0");
+  Require(max_radial > 0 && max_radial < 1, "stereo_brightness.max_radial must be in (0, 1)");
 }
 
 std::optional<StereoBrightness> FitBrightnessTransfer(const std::vector<double>& x, const std::vector<double>& y,
@@ -87,10 +89,55 @@ std::optional<StereoBrightness> FitBrightnessTransfer(const std::vector<double>&
   return fit;
 }
 
+std::optional<StereoBrightness> FitRadialBrightnessTransfer(const std::vector<double>& x, const std::vector<double>& y,
+                                                            const std::vector<double>& rho_sq, double huber_threshold,
+                                                            double max_gain_ratio, double max_radial) {
+  Require(x.size() == y.size() && x.size() == rho_sq.size(), "brightness fit: sample vectors differ in length");
+  constexpr size_t kMinSamples = 4;
+  if (x.size() < kMinSamples) return std::nullopt;
+  // 1. The radial coefficient from the joint Huber-reweighted least squares y = g x + h rho^2 x + bias
+  //    (linear in g, h = g * radial, bias). Noise in x shrinks g and h alike, so radial = h / g keeps
+  //    no such bias (g itself would: that is why step 2 refits the line orthogonally).
+  constexpr int kReweightingIterations = 5;
+  std::vector<double> w(x.size(), 1.0);
+  Eigen::Vector3d theta = Eigen::Vector3d::Zero();
+  for (int iteration = 0; iteration < kReweightingIterations; ++iteration) {
+    Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+    for (size_t i = 0; i < x.size(); ++i) {
+      const Eigen::Vector3d a(x[i], rho_sq[i] * x[i], 1.0);
+      A.noalias() += w[i] * a * a.transpose();
+      rhs += w[i] * y[i] * a;
+    }
+    const Eigen::LDLT<Eigen::Matrix3d> ldlt(A);
+    constexpr double kMinPivotRatio = 1e-12;  // no spread in rho^2 or x: nothing radial to fit
+    const Eigen::Vector3d d = ldlt.vectorD().cwiseAbs();
+    if (ldlt.info() != Eigen::Success || !(d.minCoeff() > kMinPivotRatio * d.maxCoeff())) return std::nullopt;
+    theta = ldlt.solve(rhs);
+    for (size_t i = 0; i < x.size(); ++i) {
+      const double residual = std::abs(y[i] - (theta[0] + theta[1] * rho_sq[i]) * x[i] - theta[2]);
+      w[i] = residual <= huber_threshold ? 1.0 : huber_threshold / residual;
+    }
+  }
+  const double radial = theta[1] / theta[0];
+  if (!std::isfinite(radial) || std::abs(radial) > max_radial) return std::nullopt;
+  // 2. Gain and bias by the orthogonal line fit on x (1 + radial rho^2).
+  std::vector<double> scaled(x.size());
+  for (size_t i = 0; i < x.size(); ++i) scaled[i] = x[i] * (1.0 + radial * rho_sq[i]);
+  std::optional<StereoBrightness> fit = FitBrightnessTransfer(scaled, y, huber_threshold, max_gain_ratio);
+  if (!fit) return std::nullopt;
+  fit->radial = radial;
+  return fit;
+}
+
 double BrightnessTransferChange(const StereoBrightness& a, const StereoBrightness& b, double low, double high) {
-  // The difference is linear in I: its largest magnitude on [low, high] is at an end.
-  const double dg = b.gain - a.gain, db = b.bias - a.bias;
-  return std::max(std::abs(dg * low + db), std::abs(dg * high + db));
+  // The difference is bilinear in (I, rho^2): its largest magnitude is at a corner of [low, high] x [0, 1].
+  double change = 0.0;
+  for (double rho_sq : {0.0, 1.0}) {
+    const double dg = b.Gain(rho_sq) - a.Gain(rho_sq), db = b.bias - a.bias;
+    change = std::max({change, std::abs(dg * low + db), std::abs(dg * high + db)});
+  }
+  return change;
 }
 
 UnclippedRange UnclippedIntensityRange(const PyramidLevel& level) {

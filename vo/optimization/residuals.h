@@ -40,7 +40,11 @@ struct ResidualGeometry {
   Eigen::Matrix3f R_fej = Eigen::Matrix3f::Identity();
   Eigen::Vector3f t_fej = Eigen::Vector3f::Zero();
   bool fej_is_current = true;  // (R_fej, t_fej) == (R, t): the second projection is skipped
-  float affine_scale = 1.0f;  // e^{a_j - a_i}
+  float affine_scale = 1.0f;  // e^{a_j - a_i}; static stereo: the transfer's gain
+  // Static stereo only: the transfer's radial term, scale = affine_scale (1 + radial_gain rho^2) at the
+  // host pixel (StereoBrightness); 0 elsewhere.
+  float radial_gain = 0.0f;
+  float inv_corner_sq = 0.0f;  // 1 / r_corner^2 (RadialPosition)
   float b_host = 0.0f, b_target = 0.0f;
   float term_weight = 1.0f;   // 1 (temporal), mu (static stereo), lambda (virtual stereo)
   float fx = 0, fy = 0, cx = 0, cy = 0;  // level-0 intrinsics

@@ -73,7 +73,8 @@ static void CheckDisparityMap(const cv::Mat& map, const PyramidLevel& level) {
 }
 
 static void CheckBrightnessTransfer(const StereoBrightness& transfer) {
-  Require(std::isfinite(transfer.gain) && transfer.gain > 0 && std::isfinite(transfer.bias),
+  Require(std::isfinite(transfer.gain) && transfer.gain > 0 && std::isfinite(transfer.bias) &&
+              std::isfinite(transfer.radial) && transfer.radial > -1,
           "window: the right image's brightness transfer is not finite with a positive gain");
 }
 

@@ -45,10 +45,11 @@ struct FrameEvent {
   // residuals and their total weighted energy (0 outside DVSO mode).
   int virtual_stereo_residuals = 0;
   double virtual_stereo_energy = 0;
-  // Stereo mode: the newest stereo keyframe's brightness transfer I_right ~ gain * I_left + bias
-  // (vo/frame/stereo_brightness.h); 1 and 0 until the first one and in the other modes.
+  // Stereo mode: the newest stereo keyframe's brightness transfer I_right ~ gain * (1 + radial rho^2) *
+  // I_left + bias (vo/frame/stereo_brightness.h); 1, 0, 0 until the first one and in the other modes.
   double stereo_gain = 1.0;
   double stereo_bias = 0.0;
+  double stereo_radial = 0.0;
 };
 
 struct PointInfo {

@@ -47,6 +47,8 @@ void VisitFields(Options& o, Visitor&& v) {
   v("stereo_brightness", "min_matched_points", o.stereo_brightness.min_matched_points);
   v("stereo_brightness", "max_matching_passes", o.stereo_brightness.max_matching_passes);
   v("stereo_brightness", "rematch_change", o.stereo_brightness.rematch_change);
+  v("stereo_brightness", "estimate_radial", o.stereo_brightness.estimate_radial);
+  v("stereo_brightness", "max_radial", o.stereo_brightness.max_radial);
 
   v("selector", "desired_points", o.selector.desired_points);
   v("selector", "region_size", o.selector.region_size);

@@ -128,6 +128,7 @@ FrameEvent System::ProcessFrame(int frame_index, double timestamp, const cv::Mat
   ev.virtual_stereo_energy = virtual_stereo_energy_;
   ev.stereo_gain = last_right_brightness_.gain;
   ev.stereo_bias = last_right_brightness_.bias;
+  ev.stereo_radial = last_right_brightness_.radial;
   current_left_image_.release();
   last_T_world_camera_ = ev.T_world_camera;
   for (OdometryObserver* o : observers_) o->OnFrameTracked(ev);
@@ -148,6 +149,7 @@ FrameEvent System::ReportUnreadableFrame(int frame_index, double timestamp) {
   }
   ev.stereo_gain = last_right_brightness_.gain;
   ev.stereo_bias = last_right_brightness_.bias;
+  ev.stereo_radial = last_right_brightness_.radial;
   for (OdometryObserver* o : observers_) o->OnFrameTracked(ev);
   return ev;
 }

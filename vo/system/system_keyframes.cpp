@@ -106,13 +106,14 @@ std::vector<ImmaturePoint> System::TraceStaticStereo(const std::vector<ImmatureP
   const Eigen::Vector3f stereo_Kt(static_cast<float>(-camera_.FxB()), 0.f, 0.f);
   const float max_disparity = static_cast<float>(
       std::min(options_.stereo_max_disparity_fraction * camera_.left.width, options_.stereo_max_disparity_px));
+  const RadialPosition radial(camera_.left.cx, camera_.left.cy, camera_.left.width, camera_.left.height);
   std::vector<ImmaturePoint> traced;
   traced.reserve(points.size());
   for (ImmaturePoint p : points) {
-    // Static stereo, through the pair's brightness transfer I_right ~ gain * I_left + bias.
+    // Static stereo, through the pair's brightness transfer I_right ~ Gain(rho^2) * I_left + bias.
     const TraceStatus s = p.Trace(right.level(0), Eigen::Matrix3f::Identity(), stereo_Kt,
-                                  static_cast<float>(transfer.gain), static_cast<float>(transfer.bias),
-                                  options_.immature, max_disparity);
+                                  static_cast<float>(transfer.Gain(radial.Sq(p.u, p.v))),
+                                  static_cast<float>(transfer.bias), options_.immature, max_disparity);
     if (s == TraceStatus::kOutOfBounds) continue;
     if (s != TraceStatus::kGood) {
       // No usable stereo match: keep it as a plain candidate for temporal tracing.
@@ -133,7 +134,8 @@ std::optional<System::MatchedBrightnessFit> System::FitStereoBrightnessFromMatch
   const PyramidLevel& host = left.level(0);
   const PyramidLevel& target = right.level(0);
   const float fxb = static_cast<float>(camera_.FxB());
-  std::vector<double> host_intensity, right_intensity;
+  const RadialPosition radial(camera_.left.cx, camera_.left.cy, camera_.left.width, camera_.left.height);
+  std::vector<double> host_intensity, right_intensity, host_rho_sq;
   int matched_points = 0;
   for (const ImmaturePoint& p : traced) {
     // Unambiguous matches only (DSO's activation quality): a repeated texture's wrong match would
@@ -161,11 +163,14 @@ std::optional<System::MatchedBrightnessFit> System::FitStereoBrightnessFromMatch
       if (!left_unclipped.Contains(h) || !right_unclipped.Contains(r)) continue;
       host_intensity.push_back(h);
       right_intensity.push_back(r);
+      host_rho_sq.push_back(radial.Sq(p.u + dx, p.v + dy));
     }
   }
   if (matched_points < o.min_matched_points) return std::nullopt;
   const std::optional<StereoBrightness> transfer =
-      FitBrightnessTransfer(host_intensity, right_intensity, o.huber_threshold, o.max_gain_ratio);
+      o.estimate_radial ? FitRadialBrightnessTransfer(host_intensity, right_intensity, host_rho_sq, o.huber_threshold,
+                                                      o.max_gain_ratio, o.max_radial)
+                        : FitBrightnessTransfer(host_intensity, right_intensity, o.huber_threshold, o.max_gain_ratio);
   if (!transfer) return std::nullopt;
   // The intensity range the fit speaks for: 2nd to 98th percentile of the left samples.
   std::vector<double> sorted = host_intensity;
