@@ -19,8 +19,9 @@ namespace {
 
 // Options whose presence on the command line Run checks (CLI11 count()): each of them is an error where
 // another option would silently override or ignore it.
-const char* const kCheckedOptions[] = {"--exposure-level", "--height-jitter", "--noise-sigma", "--vignetting",
-                                       "--exposure-sigma", "--speed",         "--raw-drive"};
+const char* const kCheckedOptions[] = {"--exposure-level", "--height-jitter", "--noise-sigma",
+                                       "--vignetting",     "--right-vignetting", "--exposure-sigma",
+                                       "--speed",          "--raw-drive"};
 
 struct SimulateArgs {
   std::string output_dir;

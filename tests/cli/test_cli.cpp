@@ -257,6 +257,7 @@ TEST(Cli, SimulateRejectsOptionsThatWouldBeOverriddenOrIgnored) {
       {" --appearance varied --height-jitter 0.02", "--height-jitter"},
       {" --no-noise --noise-sigma 2", "--noise-sigma"},
       {" --no-vignetting --vignetting 0.2", "--vignetting"},
+      {" --no-vignetting --right-vignetting 0", "--right-vignetting"},
       {" --no-exposure-drift --exposure-sigma 0.05", "--exposure-sigma"},
       {" --trajectory " + dir + "/poses.txt --speed 5", "--speed"}};
   for (const auto& [args, option] : cases) {

@@ -96,8 +96,8 @@ std::optional<StereoBrightness> FitRadialBrightnessTransfer(const std::vector<do
   constexpr size_t kMinSamples = 4;
   if (x.size() < kMinSamples) return std::nullopt;
   // 1. The radial coefficient from the joint Huber-reweighted least squares y = g x + h rho^2 x + bias
-  //    (linear in g, h = g * radial, bias). Noise in x shrinks g and h alike, so radial = h / g keeps
-  //    no such bias (g itself would: that is why step 2 refits the line orthogonally).
+  //    (linear in g, h = g * radial, bias). Noise in x shrinks g and h nearly alike, so radial = h / g
+  //    keeps almost none of that bias (g itself would: that is why step 2 refits the line orthogonally).
   constexpr int kReweightingIterations = 5;
   std::vector<double> w(x.size(), 1.0);
   Eigen::Vector3d theta = Eigen::Vector3d::Zero();

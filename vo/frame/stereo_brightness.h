@@ -33,7 +33,7 @@ namespace dvso::vo {
 
 // I_right(p') ~ gain * (1 + radial * rho^2) * I_left(p) + bias at a match p -> p' (the immature point's
 // (a, b) convention with a = Gain(rho^2); the static stereo residual's affine_scale = gain, radial_gain =
-// radial, b_target = bias, b_host = 0). rho = |p - principal point| / r_corner (RadialPositionSq) at the
+// radial, b_target = bias, b_host = 0). rho = |p - principal point| / r_corner (RadialPosition::Sq) at the
 // LEFT pixel p: the radial term absorbs a difference in the two lenses' vignetting (V_right(p') / V_left(p),
 // first order in rho^2; the disparity's shift of p' against p is left to the fit's mean). Session 28 measured
 // that a right lens with a fall-off 0.3 weaker at the corners cost 31 % of the labels without it.

@@ -129,8 +129,8 @@ ResidualGeometry StaticStereoGeometry(const Keyframe& host, const StereoCamera& 
   g.t = Eigen::Vector3f(-static_cast<float>(camera.baseline), 0.0f, 0.0f);
   g.t_fej = g.t;
   // The right image relates to its own left image by the pair's transfer
-  // I_right ~ gain * I_left + bias (vo/frame/stereo_brightness.h), not by the
-  // keyframes' a, b: r = (I_right(p') - bias) - gain * I_left(p).
+  // I_right ~ gain (1 + radial rho^2) * I_left + bias (vo/frame/stereo_brightness.h), not by the
+  // keyframes' a, b: r = (I_right(p') - bias) - gain (1 + radial rho(p)^2) * I_left(p).
   g.affine_scale = static_cast<float>(host.right_brightness.gain);
   g.radial_gain = static_cast<float>(host.right_brightness.radial);
   g.inv_corner_sq = static_cast<float>(

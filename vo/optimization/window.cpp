@@ -75,7 +75,7 @@ static void CheckDisparityMap(const cv::Mat& map, const PyramidLevel& level) {
 static void CheckBrightnessTransfer(const StereoBrightness& transfer) {
   Require(std::isfinite(transfer.gain) && transfer.gain > 0 && std::isfinite(transfer.bias) &&
               std::isfinite(transfer.radial) && transfer.radial > -1,
-          "window: the right image's brightness transfer is not finite with a positive gain");
+          "window: the right image's brightness transfer is not finite with a positive gain and radial > -1");
 }
 
 void Window::AddKeyframe(const KeyframeInput& input) {

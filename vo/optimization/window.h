@@ -73,7 +73,7 @@ struct KeyframeInput {
   double b = 0.0;                       // affine brightness offset b
   ImagePyramidPtr left;                 // required
   ImagePyramidPtr right;                // optional: enables static stereo residuals
-  StereoBrightness right_brightness;    // I_right ~ gain * I_left + bias (vo/frame/stereo_brightness.h)
+  StereoBrightness right_brightness;    // I_right ~ gain (1 + radial rho^2) I_left + bias (vo/frame/stereo_brightness.h)
   cv::Mat right_disparity;              // optional CV_32F D^R: enables virtual stereo residuals
 };
 
@@ -137,7 +137,7 @@ struct Keyframe {
   Eigen::Matrix<double, 8, 1> prior_weight = Eigen::Matrix<double, 8, 1>::Zero();
   Eigen::Isometry3d prior_pose = Eigen::Isometry3d::Identity();
   ImagePyramidPtr left, right;
-  StereoBrightness right_brightness;    // I_right ~ gain * I_left + bias (from KeyframeInput)
+  StereoBrightness right_brightness;    // I_right ~ gain (1 + radial rho^2) I_left + bias (from KeyframeInput)
   cv::Mat right_disparity;
   std::vector<Point> points;            // active points hosted here
   int num_points_added = 0;             // points ever activated here (for the DSO marginalisation rule)
