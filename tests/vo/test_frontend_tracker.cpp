@@ -118,14 +118,15 @@ TEST(FrontendTracker, PointFlowByHand) {
   // fx * 0.1 * 0.5 pixels in x; the full flow is the same without rotation.
   const float fx = 700, fy = 690;
   const Eigen::Vector3f ray(0.2f, -0.1f, 1.0f);
-  PointFlow flow = ComputePointFlow(Eigen::Matrix3f::Identity(), Eigen::Vector3f(0.1f, 0, 0), ray, 0.5f, fx, fy);
+  const Eigen::Vector3f t_x(0.1f, 0, 0);
+  PointFlow flow = ComputePointFlow(ray + t_x * 0.5f, t_x, ray, 0.5f, fx, fy);
   ASSERT_TRUE(flow.has_full && flow.has_translation);
   EXPECT_NEAR(flow.sq_translation, (fx * 0.05f) * (fx * 0.05f), 1e-2);
   EXPECT_NEAR(flow.sq_full, flow.sq_translation, 1e-2);
   // A rotation that brings the ray onto the optical axis moves the point to the
   // principal point; the translation-only flow ignores it.
   const Eigen::Matrix3f R = Eigen::Quaternionf::FromTwoVectors(ray, Eigen::Vector3f::UnitZ()).toRotationMatrix();
-  flow = ComputePointFlow(R, Eigen::Vector3f::Zero(), ray, 0.5f, fx, fy);
+  flow = ComputePointFlow(R * ray, Eigen::Vector3f::Zero(), ray, 0.5f, fx, fy);
   ASSERT_TRUE(flow.has_full && flow.has_translation);
   EXPECT_NEAR(flow.sq_full, (fx * 0.2f) * (fx * 0.2f) + (fy * 0.1f) * (fy * 0.1f), 1e-1);
   EXPECT_EQ(flow.sq_translation, 0.0f);
@@ -140,7 +141,7 @@ TEST(FrontendTracker, PointThatTheTranslationAloneMovesBehindTheCameraHasNoTrans
   const Eigen::Vector3f ray(0.6f, 0.0f, 1.0f);
   const Eigen::Matrix3f R = Eigen::Quaternionf::FromTwoVectors(ray, Eigen::Vector3f::UnitZ()).toRotationMatrix();
   const Eigen::Vector3f t(0, 0, -1.05f);
-  const PointFlow flow = ComputePointFlow(R, t, ray, 1.0f, fx, fy);
+  const PointFlow flow = ComputePointFlow(R * ray + t * 1.0f, t, ray, 1.0f, fx, fy);
   EXPECT_TRUE(flow.has_full);
   EXPECT_FALSE(flow.has_translation);
   EXPECT_EQ(flow.sq_translation, 0.0f);

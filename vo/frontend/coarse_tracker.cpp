@@ -22,11 +22,10 @@ void CoarseTrackerOptions::Check() const {
   Require(retrack_ratio >= 1, "tracker retrack_ratio must be >= 1");
 }
 
-PointFlow ComputePointFlow(const Eigen::Matrix3f& R, const Eigen::Vector3f& t, const Eigen::Vector3f& ray,
+PointFlow ComputePointFlow(const Eigen::Vector3f& q_full, const Eigen::Vector3f& t, const Eigen::Vector3f& ray,
                            float idepth, float fx, float fy) {
   PointFlow flow;
   // Both projections are of the point scaled by idepth: q = idepth * (R X + t).
-  const Eigen::Vector3f q_full = R * ray + t * idepth;
   const Eigen::Vector3f q_translation = ray + t * idepth;
   const auto squared_shift = [&](const Eigen::Vector3f& q) {
     const float du = fx * (q.x() / q.z() - ray.x()), dv = fy * (q.y() / q.z() - ray.y());
@@ -121,8 +120,9 @@ CoarseTracker::LevelStats CoarseTracker::Evaluate(const PyramidLevel& target, in
     const float ar = std::fabs(r);
     ++stats.num;
     if (want_flow) {
-      const PointFlow flow = ComputePointFlow(R, t, ray, p.idepth, fx, fy);
-      if (flow.has_full) stats.flow_sq_rt += flow.sq_full;  // q.z() > kMinProjectedDepth was checked above
+      // q.z() > kMinProjectedDepth was checked above, so the full flow exists.
+      const PointFlow flow = ComputePointFlow(q, t, ray, p.idepth, fx, fy);
+      stats.flow_sq_rt += flow.sq_full;
       if (flow.has_translation) {
         stats.flow_sq_t += flow.sq_translation;
         ++stats.num_flow_t;

@@ -44,7 +44,9 @@ struct PointFlow {
   float sq_translation = 0;
 };
 inline constexpr float kMinProjectedDepth = 1e-6f;  // projected z (scaled by idepth) below this = behind the camera
-PointFlow ComputePointFlow(const Eigen::Matrix3f& R, const Eigen::Vector3f& t, const Eigen::Vector3f& ray,
+// `q_full` = R * ray + t * idepth, the point under the full motion scaled by idepth (the tracker has it
+// already).
+PointFlow ComputePointFlow(const Eigen::Vector3f& q_full, const Eigen::Vector3f& t, const Eigen::Vector3f& ray,
                            float idepth, float fx, float fy);
 
 // One reference point at level 0 of the reference keyframe.
