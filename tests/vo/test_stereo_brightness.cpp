@@ -216,11 +216,70 @@ TEST(StereoBrightness, RadialFitRecoversAVignettingDifference) {
   EXPECT_FALSE(FitRadialBrightnessTransfer(x, y, rho_sq, 4.0, 3.0, 0.2).has_value());
 }
 
+TEST(StereoBrightness, RadialTermAndTheLineAtItAreTheJointFitsTwoSteps) {
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<double> intensity(20, 200), position(0, 1);
+  std::normal_distribution<double> noise(0, 1.0);
+  std::vector<double> x, y, rho_sq;
+  for (int i = 0; i < 3000; ++i) {
+    x.push_back(intensity(rng));
+    rho_sq.push_back(position(rng));
+    y.push_back(0.9 * (1 - 0.2 * rho_sq.back()) * x.back() + 4 + noise(rng));
+  }
+  const std::optional<double> radial = FitRadialTerm(x, y, rho_sq, 4.0, 0.8);
+  ASSERT_TRUE(radial.has_value());
+  EXPECT_NEAR(*radial, -0.2, 0.01);
+  const std::optional<StereoBrightness> joint = FitRadialBrightnessTransfer(x, y, rho_sq, 4.0, 3.0, 0.8);
+  const std::optional<StereoBrightness> at = FitBrightnessTransferAtRadial(x, y, rho_sq, *radial, 4.0, 3.0);
+  ASSERT_TRUE(joint.has_value() && at.has_value());
+  EXPECT_EQ(at->radial, *radial);
+  EXPECT_EQ(at->gain, joint->gain);
+  EXPECT_EQ(at->bias, joint->bias);
+  EXPECT_NEAR(at->gain, 0.9, 0.01);
+  // A radial term given from elsewhere (the pool) is used as given: gain and bias absorb what they can.
+  const std::optional<StereoBrightness> at_zero = FitBrightnessTransferAtRadial(x, y, rho_sq, 0.0, 4.0, 3.0);
+  ASSERT_TRUE(at_zero.has_value());
+  EXPECT_EQ(at_zero->radial, 0.0);
+  EXPECT_LT(at_zero->gain, 0.9);  // the mean fall-off 0.2 * E[rho^2] = 0.1 goes into the gain
+  EXPECT_FALSE(FitRadialTerm(x, y, rho_sq, 4.0, 0.1).has_value());  // |radial| 0.2 > max_radial
+}
+
+TEST(StereoBrightness, RadialTermPoolIsTheMedianOfTheLastKeyframesAndTheCurrentOne) {
+  RadialTermPool pool(3);
+  EXPECT_EQ(pool.MedianWith(0.4), 0.4);  // nothing stored: the keyframe's own fit
+  pool.Add(0.30);
+  EXPECT_NEAR(pool.MedianWith(0.10), 0.20, 1e-12);  // even count: mean of the middle two
+  pool.Add(0.26);
+  EXPECT_NEAR(pool.MedianWith(-0.50), 0.26, 1e-12);  // one outlying keyframe does not move it far
+  pool.Add(0.28);
+  pool.Add(0.0);  // the capacity is 3: 0.30 goes
+  EXPECT_EQ(pool.size(), 3);
+  // stored {0.26, 0.28, 0.0} + 0.27 -> middle two 0.26, 0.27
+  EXPECT_NEAR(pool.MedianWith(0.27), 0.265, 1e-12);
+  RadialTermPool none(0);  // capacity 0: each keyframe alone (the behaviour of session 28)
+  none.Add(0.3);
+  EXPECT_EQ(none.size(), 0);
+  EXPECT_EQ(none.MedianWith(-0.1), -0.1);
+  EXPECT_THROW(RadialTermPool(-1), Error);
+  EXPECT_THROW(pool.Add(std::nan("")), Error);
+  StereoBrightnessOptions o;
+  o.radial_pool_keyframes = -1;
+  EXPECT_THROW(o.Check(), Error);
+}
+
 TEST(StereoBrightness, RadialPositionIsZeroAtThePrincipalPointAndOneInTheCorners) {
-  const RadialPosition rho(320.0, 240.0, 640, 480);
+  PinholeCamera camera;
+  camera.cx = 320.0;
+  camera.cy = 240.0;
+  camera.width = 640;
+  camera.height = 480;
+  const RadialPosition rho(camera);
   EXPECT_EQ(rho.Sq(320.0, 240.0), 0.0);
   EXPECT_NEAR(rho.Sq(0.0, 0.0), 1.0, 1e-12);
   EXPECT_NEAR(rho.Sq(640.0, 240.0), 320.0 * 320.0 / (400.0 * 400.0), 1e-12);
+  // The residual's float version is the same formula.
+  const BasicRadialPosition<float> rho_float(camera);
+  EXPECT_NEAR(rho_float.Sq(10.0f, 20.0f), rho.Sq(10.0, 20.0), 1e-6);
   // The change between two transfers is taken over the corners too: radial 0.1 at I = 100 is 10.
   EXPECT_NEAR(BrightnessTransferChange({1.0, 0.0, 0.0}, {1.0, 0.0, 0.1}, 50, 100), 10.0, 1e-12);
 }

@@ -9,12 +9,14 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <vector>
 
 #include "core/alignment.h"
 #include "core/simulator.h"
 #include "tests/dvso_cli_runner.h"
 #include "tests/vo/simulated_sequence.h"
 #include "core/trajectory.h"
+#include "vo/frame/stereo_brightness.h"
 #include "vo/system/output_writers.h"
 #include "vo/system/system.h"
 #include "tests/temp_dir.h"
@@ -34,7 +36,33 @@ struct RunOutcome {
   int max_window_span = 0;  // largest frame distance between the oldest and the newest keyframe of a window
   int keyframe_candidates = 0, keyframe_candidates_within_1px = 0;  // OnKeyframeCandidates against the GT
   double stereo_gain = 0, stereo_bias = 0;  // the last frame's reported brightness transfer of the pair
+  std::vector<double> stereo_radial;        // every frame's reported radial term
 };
+
+// The right camera's response: I -> gain (1 + radial rho^2) I + bias, rho^2 at the right pixel relative to
+// the half diagonal (vo/frame/stereo_brightness.h): another sensor's gain and black level, another lens's
+// vignetting.
+struct RightCameraResponse {
+  double gain = 1.0, bias = 0.0, radial = 0.0;
+};
+
+cv::Mat ApplyResponse(const cv::Mat& image, const PinholeCamera& camera, const RightCameraResponse& response) {
+  cv::Mat out;
+  if (response.radial == 0.0) {
+    image.convertTo(out, -1, response.gain, response.bias);
+    return out;
+  }
+  cv::Mat scaled(image.size(), CV_32F);
+  const RadialPosition rho(camera);
+  for (int v = 0; v < image.rows; ++v) {
+    for (int u = 0; u < image.cols; ++u) {
+      scaled.at<float>(v, u) = static_cast<float>(response.gain * (1.0 + response.radial * rho.Sq(u, v)) *
+                                                      image.at<uchar>(v, u) + response.bias);
+    }
+  }
+  scaled.convertTo(out, image.type());  // rounds and saturates as a sensor would
+  return out;
+}
 
 // Records how far back in time the window reaches.
 class WindowSpanObserver : public OdometryObserver {
@@ -49,8 +77,12 @@ class WindowSpanObserver : public OdometryObserver {
 
 class LastFrameObserver : public OdometryObserver {
  public:
-  void OnFrameTracked(const FrameEvent& event) override { last = event; }
+  void OnFrameTracked(const FrameEvent& event) override {
+    last = event;
+    stereo_radial.push_back(event.stereo_radial);
+  }
   FrameEvent last;
+  std::vector<double> stereo_radial;  // every frame's reported radial term of the pair's transfer
 };
 
 // Compares the stereo-matched keyframe candidates (OnKeyframeCandidates) with the exact disparity.
@@ -72,9 +104,8 @@ class CandidateObserver : public OdometryObserver {
   const SimulatedSequence& seq_;
 };
 
-// `right_gain`, `right_bias`: the right images pass through I -> gain * I + bias (another sensor's response).
-RunOutcome RunSystem(OdometryMode mode, const OdometryOptions& options = {}, double right_gain = 1.0,
-                     double right_bias = 0.0) {
+// The right images pass through `right` (another sensor's and lens's response).
+RunOutcome RunSystem(OdometryMode mode, const OdometryOptions& options = {}, const RightCameraResponse& right = {}) {
   const SimulatedSequence& seq = Sequence();
   System system(options, seq.camera, mode);
   TrajectoryRecorder recorder;
@@ -86,9 +117,9 @@ RunOutcome RunSystem(OdometryMode mode, const OdometryOptions& options = {}, dou
   LastFrameObserver last_frame;
   system.AddObserver(&last_frame);
   for (size_t i = 0; i < seq.left.size(); ++i) {
-    cv::Mat right;
-    if (mode == OdometryMode::kStereo) seq.right[i].convertTo(right, -1, right_gain, right_bias);
-    system.ProcessFrame(static_cast<int>(i), 0.1 * i, seq.left[i], right);
+    cv::Mat right_image;
+    if (mode == OdometryMode::kStereo) right_image = ApplyResponse(seq.right[i], seq.camera.left, right);
+    system.ProcessFrame(static_cast<int>(i), 0.1 * i, seq.left[i], right_image);
   }
   system.Finish();
   RunOutcome r;
@@ -100,6 +131,7 @@ RunOutcome RunSystem(OdometryMode mode, const OdometryOptions& options = {}, dou
   r.keyframe_candidates_within_1px = candidates.within_1px;
   r.stereo_gain = last_frame.last.stereo_gain;
   r.stereo_bias = last_frame.last.stereo_bias;
+  r.stereo_radial = last_frame.stereo_radial;
   return r;
 }
 
@@ -147,7 +179,7 @@ double MaxTranslationError(const Trajectory& estimate, const SimulatedSequence& 
 // Without it the static stereo search compares unequal intensities (the control run below).
 TEST(SystemSimulated, StereoStaysMetricWithARightCameraOfAnotherGainAndBlackLevel) {
   const SimulatedSequence& seq = Sequence();
-  const RunOutcome r = RunSystem(OdometryMode::kStereo, OdometryOptions{}, 1.15, 6.0);
+  const RunOutcome r = RunSystem(OdometryMode::kStereo, OdometryOptions{}, {1.15, 6.0});
   ASSERT_EQ(r.estimate.size(), seq.truth.size());
   EXPECT_EQ(r.lost, 0);
   EXPECT_EQ(r.initializing, 0);
@@ -166,12 +198,48 @@ TEST(SystemSimulated, StereoStaysMetricWithARightCameraOfAnotherGainAndBlackLeve
 
   OdometryOptions identical_cameras;
   identical_cameras.stereo_brightness.estimate = false;
-  const RunOutcome control = RunSystem(OdometryMode::kStereo, identical_cameras, 1.15, 6.0);
+  const RunOutcome control = RunSystem(OdometryMode::kStereo, identical_cameras, {1.15, 6.0});
   std::cout << "right camera x1.15 + 6: " << r.keyframe_candidates << " stereo-matched keyframe candidates with the "
             << "transfer, " << control.keyframe_candidates << " without; lost frames " << r.lost << " / "
             << control.lost << ", max error " << max_err << " / " << MaxTranslationError(control.estimate, seq)
             << " m; transfer gain " << r.stereo_gain << ", bias " << r.stereo_bias << "\n";
   EXPECT_LT(control.keyframe_candidates, r.keyframe_candidates / 2);
+}
+
+// The spread (largest - smallest) of the reported radial term over the second half of a run, when the
+// transfer has been refitted at several keyframes.
+double SecondHalfSpread(const std::vector<double>& values) {
+  const auto [lo, hi] = std::minmax_element(values.begin() + values.size() / 2, values.end());
+  return *hi - *lo;
+}
+
+// A right lens whose corners are 25 % brighter relative to the left one's (another vignetting): with the
+// radial term on, the pair's transfer finds it, and pooled over keyframes (RadialTermPool) it holds
+// steadier than each keyframe's own fit. On identical lenses it stays near 0.
+TEST(SystemSimulated, StereoFindsARightLensWithAnotherVignettingAndPoolsItOverKeyframes) {
+  const SimulatedSequence& seq = Sequence();
+  OdometryOptions pooled;
+  pooled.stereo_brightness.estimate_radial = true;
+  const RightCameraResponse other_lens{1.0, 0.0, 0.25};
+  const RunOutcome r = RunSystem(OdometryMode::kStereo, pooled, other_lens);
+  ASSERT_EQ(r.estimate.size(), seq.truth.size());
+  EXPECT_EQ(r.lost, 0);
+  const double max_err = MaxTranslationError(r.estimate, seq);
+  EXPECT_LT(max_err, 0.02 * seq.path_length) << "max error " << max_err << " m over " << seq.path_length << " m";
+  ASSERT_EQ(r.stereo_radial.size(), seq.truth.size());
+  EXPECT_NEAR(r.stereo_radial.back(), 0.25, 0.05);
+
+  OdometryOptions per_keyframe = pooled;
+  per_keyframe.stereo_brightness.radial_pool_keyframes = 0;
+  const RunOutcome each = RunSystem(OdometryMode::kStereo, per_keyframe, other_lens);
+  const RunOutcome identical = RunSystem(OdometryMode::kStereo, pooled);
+  std::cout << "right lens 25 % brighter in the corners: radial " << r.stereo_radial.back() << " pooled, "
+            << each.stereo_radial.back() << " per keyframe; second-half spread " << SecondHalfSpread(r.stereo_radial)
+            << " pooled, " << SecondHalfSpread(each.stereo_radial) << " per keyframe; identical lenses "
+            << identical.stereo_radial.back() << "\n";
+  EXPECT_LT(SecondHalfSpread(r.stereo_radial), SecondHalfSpread(each.stereo_radial));
+  EXPECT_NEAR(identical.stereo_radial.back(), 0.0, 0.05);
+  EXPECT_EQ(identical.lost, 0);
 }
 
 TEST(SystemSimulated, MonoTracksWithBoundedSim3Error) {

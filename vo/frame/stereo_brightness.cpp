@@ -45,6 +45,7 @@ void StereoBrightnessOptions::Check() const {
   Require(max_matching_passes >= 1, "stereo_brightness.max_matching_passes must be >= 1");
   Require(rematch_change > 0, "stereo_brightness.rematch_change must be > 0");
   Require(max_radial > 0 && max_radial < 1, "stereo_brightness.max_radial must be in (0, 1)");
+  Require(radial_pool_keyframes >= 0, "stereo_brightness.radial_pool_keyframes must be >= 0");
 }
 
 std::optional<StereoBrightness> FitBrightnessTransfer(const std::vector<double>& x, const std::vector<double>& y,
@@ -89,15 +90,14 @@ std::optional<StereoBrightness> FitBrightnessTransfer(const std::vector<double>&
   return fit;
 }
 
-std::optional<StereoBrightness> FitRadialBrightnessTransfer(const std::vector<double>& x, const std::vector<double>& y,
-                                                            const std::vector<double>& rho_sq, double huber_threshold,
-                                                            double max_gain_ratio, double max_radial) {
+std::optional<double> FitRadialTerm(const std::vector<double>& x, const std::vector<double>& y,
+                                    const std::vector<double>& rho_sq, double huber_threshold, double max_radial) {
   Require(x.size() == y.size() && x.size() == rho_sq.size(), "brightness fit: sample vectors differ in length");
   constexpr size_t kMinSamples = 4;
   if (x.size() < kMinSamples) return std::nullopt;
-  // 1. The radial coefficient from the joint Huber-reweighted least squares y = g x + h rho^2 x + bias
-  //    (linear in g, h = g * radial, bias). Noise in x shrinks g and h nearly alike, so radial = h / g
-  //    keeps almost none of that bias (g itself would: that is why step 2 refits the line orthogonally).
+  // The joint Huber-reweighted least squares y = g x + h rho^2 x + bias (linear in g, h = g * radial,
+  // bias). Noise in x shrinks g and h nearly alike, so radial = h / g keeps almost none of that bias
+  // (g itself would: that is why gain and bias come from the orthogonal fit, FitBrightnessTransferAtRadial).
   constexpr int kReweightingIterations = 5;
   std::vector<double> w(x.size(), 1.0);
   Eigen::Vector3d theta = Eigen::Vector3d::Zero();
@@ -121,13 +121,48 @@ std::optional<StereoBrightness> FitRadialBrightnessTransfer(const std::vector<do
   }
   const double radial = theta[1] / theta[0];
   if (!std::isfinite(radial) || std::abs(radial) > max_radial) return std::nullopt;
-  // 2. Gain and bias by the orthogonal line fit on x (1 + radial rho^2).
+  return radial;
+}
+
+std::optional<StereoBrightness> FitBrightnessTransferAtRadial(const std::vector<double>& x, const std::vector<double>& y,
+                                                              const std::vector<double>& rho_sq, double radial,
+                                                              double huber_threshold, double max_gain_ratio) {
+  Require(x.size() == rho_sq.size(), "brightness fit: sample vectors differ in length");
   std::vector<double> scaled(x.size());
   for (size_t i = 0; i < x.size(); ++i) scaled[i] = x[i] * (1.0 + radial * rho_sq[i]);
   std::optional<StereoBrightness> fit = FitBrightnessTransfer(scaled, y, huber_threshold, max_gain_ratio);
-  if (!fit) return std::nullopt;
-  fit->radial = radial;
+  if (fit) fit->radial = radial;
   return fit;
+}
+
+std::optional<StereoBrightness> FitRadialBrightnessTransfer(const std::vector<double>& x, const std::vector<double>& y,
+                                                            const std::vector<double>& rho_sq, double huber_threshold,
+                                                            double max_gain_ratio, double max_radial) {
+  const std::optional<double> radial = FitRadialTerm(x, y, rho_sq, huber_threshold, max_radial);
+  if (!radial) return std::nullopt;
+  return FitBrightnessTransferAtRadial(x, y, rho_sq, *radial, huber_threshold, max_gain_ratio);
+}
+
+RadialTermPool::RadialTermPool(int capacity) : capacity_(capacity) {
+  Require(capacity >= 0, "RadialTermPool: capacity must be >= 0");
+}
+
+void RadialTermPool::Add(double keyframe_radial) {
+  Require(std::isfinite(keyframe_radial), "RadialTermPool: a radial term must be finite");
+  if (capacity_ == 0) return;
+  fits_.push_back(keyframe_radial);
+  if (static_cast<int>(fits_.size()) > capacity_) fits_.pop_front();
+}
+
+double RadialTermPool::MedianWith(double current) const {
+  std::vector<double> values(fits_.begin(), fits_.end());
+  values.push_back(current);
+  const size_t middle = values.size() / 2;
+  std::nth_element(values.begin(), values.begin() + middle, values.end());
+  const double upper = values[middle];
+  if (values.size() % 2 == 1) return upper;
+  const double lower = *std::max_element(values.begin(), values.begin() + middle);
+  return 0.5 * (lower + upper);
 }
 
 double BrightnessTransferChange(const StereoBrightness& a, const StereoBrightness& b, double low, double high) {

@@ -24,9 +24,11 @@
 // transfer moved, matches again.
 #pragma once
 
+#include <deque>
 #include <optional>
 #include <vector>
 
+#include "core/camera.h"
 #include "vo/frame/image_pyramid.h"
 
 namespace dvso::vo {
@@ -46,13 +48,21 @@ struct StereoBrightness {
 
 // rho^2 = ((u - cx)^2 + (v - cy)^2) / r_corner^2 with r_corner^2 = (width^2 + height^2) / 4 (the image's
 // half diagonal, the simulator's vignetting convention): 0 at the principal point, about 1 in the corners.
-struct RadialPosition {
-  double cx = 0, cy = 0, inv_corner_sq = 0;
-  RadialPosition() = default;
-  RadialPosition(double cx_, double cy_, int width, int height)
-      : cx(cx_), cy(cy_), inv_corner_sq(4.0 / (static_cast<double>(width) * width + static_cast<double>(height) * height)) {}
-  double Sq(double u, double v) const { return ((u - cx) * (u - cx) + (v - cy) * (v - cy)) * inv_corner_sq; }
+// The one implementation of rho^2: the stereo search and the brightness fit use it in double, the static
+// stereo residual in float (BasicRadialPosition<float>, vo/optimization/residuals.h).
+template <typename Scalar>
+struct BasicRadialPosition {
+  Scalar cx = 0, cy = 0, inv_corner_sq = 0;
+  BasicRadialPosition() = default;
+  BasicRadialPosition(Scalar cx_, Scalar cy_, Scalar inv_corner_sq_) : cx(cx_), cy(cy_), inv_corner_sq(inv_corner_sq_) {}
+  explicit BasicRadialPosition(const PinholeCamera& camera)
+      : cx(static_cast<Scalar>(camera.cx)),
+        cy(static_cast<Scalar>(camera.cy)),
+        inv_corner_sq(static_cast<Scalar>(4.0 / (static_cast<double>(camera.width) * camera.width +
+                                                 static_cast<double>(camera.height) * camera.height))) {}
+  Scalar Sq(Scalar u, Scalar v) const { return ((u - cx) * (u - cx) + (v - cy) * (v - cy)) * inv_corner_sq; }
 };
+using RadialPosition = BasicRadialPosition<double>;
 
 struct StereoBrightnessOptions {
   bool estimate = true;             // false: identical cameras assumed (gain 1, bias 0; the behaviour until session 27)
@@ -70,6 +80,9 @@ struct StereoBrightnessOptions {
   bool estimate_radial = false;     // also fit the radial gain term (lenses with different vignetting; off by
                                     // default: on identical lenses its fit noise costs a little, docs/labels.md)
   double max_radial = 0.8;          // a fitted |radial| above this is implausible: the fit is refused
+  int radial_pool_keyframes = 1000; // the radial term is a lens property: each keyframe uses the median of its own
+                                    // fit and those of up to this many earlier keyframes (0: its own fit alone;
+                                    // 50 still wandered by +-0.05 with the scene, docs/labels.md "Session 29")
   void Check() const;
 };
 
@@ -87,6 +100,34 @@ std::optional<StereoBrightness> FitBrightnessTransfer(const std::vector<double>&
 std::optional<StereoBrightness> FitRadialBrightnessTransfer(const std::vector<double>& x, const std::vector<double>& y,
                                                             const std::vector<double>& rho_sq, double huber_threshold,
                                                             double max_gain_ratio, double max_radial);
+
+// The two steps of FitRadialBrightnessTransfer one by one: the radial coefficient (step 1; none where
+// that fit refuses), and gain and bias for a given radial coefficient (step 2; none as FitBrightnessTransfer).
+std::optional<double> FitRadialTerm(const std::vector<double>& x, const std::vector<double>& y,
+                                    const std::vector<double>& rho_sq, double huber_threshold, double max_radial);
+std::optional<StereoBrightness> FitBrightnessTransferAtRadial(const std::vector<double>& x, const std::vector<double>& y,
+                                                              const std::vector<double>& rho_sq, double radial,
+                                                              double huber_threshold, double max_gain_ratio);
+
+// The radial term pooled over keyframes. It is a property of the two lenses, constant in time (gain
+// and bias are not: auto exposure moves them between keyframes), while one keyframe's fit of it is
+// noisy and pulled by the scene (identical lenses: -0.05 to +0.065 between the keyframes of one
+// 500-frame world, and a median over 50 keyframes still follows the scene, docs/labels.md "Session 29").
+// The median of many keyframes' fits with the current one averages the scene out and keeps keyframes
+// whose matches lie on one surface from moving it. Memory is bounded by the capacity.
+class RadialTermPool {
+ public:
+  explicit RadialTermPool(int capacity = 0);
+  // Stores a keyframe's own fit; the oldest goes beyond the capacity (capacity 0 stores nothing).
+  void Add(double keyframe_radial);
+  // Median of the stored fits and `current` (the mean of the two middle values for an even count).
+  double MedianWith(double current) const;
+  int size() const { return static_cast<int>(fits_.size()); }
+
+ private:
+  int capacity_;
+  std::deque<double> fits_;
+};
 
 // Largest |Gain_b(rho^2) I + bias_b - Gain_a(rho^2) I - bias_a| over I in [low, high] and rho^2 in [0, 1]:
 // how far two transfers disagree on the intensities that occur (gain and bias of a fit trade against

@@ -133,8 +133,7 @@ ResidualGeometry StaticStereoGeometry(const Keyframe& host, const StereoCamera& 
   // keyframes' a, b: r = (I_right(p') - bias) - gain (1 + radial rho(p)^2) * I_left(p).
   g.affine_scale = static_cast<float>(host.right_brightness.gain);
   g.radial_gain = static_cast<float>(host.right_brightness.radial);
-  g.inv_corner_sq = static_cast<float>(
-      RadialPosition(camera.left.cx, camera.left.cy, camera.left.width, camera.left.height).inv_corner_sq);
+  g.radial_position = BasicRadialPosition<float>(camera.left);
   g.b_host = 0.0f;
   g.b_target = static_cast<float>(host.right_brightness.bias);
   g.term_weight = ResidualTermWeight(ResidualKind::kStaticStereo, options);
@@ -220,10 +219,9 @@ void EvaluateResidual(const ResidualGeometry& g, const Point& point, double idep
     const float host_term = point.host_intensity[k] - g.b_host;
     // Radial term of the stereo transfer at the host pattern pixel (constant in every parameter, so
     // no Jacobian changes: static stereo has no frame Jacobians and J_idepth is the target's gradient).
-    const float scale = g.radial_gain == 0.0f ? g.affine_scale
-                                              : g.affine_scale * (1.0f + g.radial_gain * ((u - g.cx) * (u - g.cx) +
-                                                                                          (v - g.cy) * (v - g.cy)) *
-                                                                                             g.inv_corner_sq);
+    const float scale = g.radial_gain == 0.0f
+                            ? g.affine_scale
+                            : g.affine_scale * (1.0f + g.radial_gain * g.radial_position.Sq(u, v));
     const float r = (sample[0] - g.b_target) - scale * host_term;
     float huber_weight, rho;
     HuberWeightAndEnergy(r, gamma, &huber_weight, &rho);

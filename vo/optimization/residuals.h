@@ -44,7 +44,7 @@ struct ResidualGeometry {
   // Static stereo only: the transfer's radial term, scale = affine_scale (1 + radial_gain rho^2) at the
   // host pixel (StereoBrightness); 0 elsewhere.
   float radial_gain = 0.0f;
-  float inv_corner_sq = 0.0f;  // 1 / r_corner^2 (RadialPosition)
+  BasicRadialPosition<float> radial_position;  // rho^2 of a host pixel
   float b_host = 0.0f, b_target = 0.0f;
   float term_weight = 1.0f;   // 1 (temporal), mu (static stereo), lambda (virtual stereo)
   float fx = 0, fy = 0, cx = 0, cy = 0;  // level-0 intrinsics

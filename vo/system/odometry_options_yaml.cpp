@@ -49,6 +49,7 @@ void VisitFields(Options& o, Visitor&& v) {
   v("stereo_brightness", "rematch_change", o.stereo_brightness.rematch_change);
   v("stereo_brightness", "estimate_radial", o.stereo_brightness.estimate_radial);
   v("stereo_brightness", "max_radial", o.stereo_brightness.max_radial);
+  v("stereo_brightness", "radial_pool_keyframes", o.stereo_brightness.radial_pool_keyframes);
 
   v("selector", "desired_points", o.selector.desired_points);
   v("selector", "region_size", o.selector.region_size);

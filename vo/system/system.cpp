@@ -37,7 +37,9 @@ System::System(const OdometryOptions& options, const StereoCamera& camera, Odome
       capabilities_(CapabilitiesOf(mode)),
       predictions_(predictions),
       prediction_timing_(ParsePredictionTiming(options.dvso.prediction_timing)),
-      tracker_(options.tracker) {
+      tracker_(options.tracker),
+      radial_pool_(options.stereo_brightness.radial_pool_keyframes),
+      radial_position_(camera.left) {
   options_.Check();
   camera_.left.Check();
   if (capabilities_.has_right_image) Require(camera_.baseline > 0, "stereo odometry needs a baseline > 0");

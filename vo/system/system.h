@@ -112,6 +112,7 @@ class System {
   struct MatchedBrightnessFit {
     StereoBrightness transfer;
     double low = 0, high = 0;
+    double keyframe_radial = 0;  // this keyframe's own radial fit (transfer.radial is the pooled one)
   };
   std::optional<MatchedBrightnessFit> FitStereoBrightnessFromMatches(const std::vector<ImmaturePoint>& traced,
                                                                      const ImagePyramid& left,
@@ -165,6 +166,8 @@ class System {
   double activation_cell_ = 0;   // adaptive activation grid cell (pixels)
   StereoBrightness last_right_brightness_;  // the last stereo keyframe's transfer (reported in FrameEvent)
   bool have_right_brightness_ = false;      // it was refitted from matches: the next keyframe starts from it
+  RadialTermPool radial_pool_;              // earlier keyframes' radial fits (a lens property: kept over resets)
+  RadialPosition radial_position_;          // rho^2 of a left pixel (the brightness transfer's radial term)
   double selector_block_size_ = 0;  // pixel selector block size that worked for the last keyframe
   int reference_id_ = -1;        // keyframe id the tracker uses
   Eigen::Isometry3d T_last_ref_ = Eigen::Isometry3d::Identity();   // last frame <- reference

@@ -106,13 +106,12 @@ std::vector<ImmaturePoint> System::TraceStaticStereo(const std::vector<ImmatureP
   const Eigen::Vector3f stereo_Kt(static_cast<float>(-camera_.FxB()), 0.f, 0.f);
   const float max_disparity = static_cast<float>(
       std::min(options_.stereo_max_disparity_fraction * camera_.left.width, options_.stereo_max_disparity_px));
-  const RadialPosition radial(camera_.left.cx, camera_.left.cy, camera_.left.width, camera_.left.height);
   std::vector<ImmaturePoint> traced;
   traced.reserve(points.size());
   for (ImmaturePoint p : points) {
     // Static stereo, through the pair's brightness transfer I_right ~ Gain(rho^2) * I_left + bias.
     const TraceStatus s = p.Trace(right.level(0), Eigen::Matrix3f::Identity(), stereo_Kt,
-                                  static_cast<float>(transfer.Gain(radial.Sq(p.u, p.v))),
+                                  static_cast<float>(transfer.Gain(radial_position_.Sq(p.u, p.v))),
                                   static_cast<float>(transfer.bias), options_.immature, max_disparity);
     if (s == TraceStatus::kOutOfBounds) continue;
     if (s != TraceStatus::kGood) {
@@ -134,7 +133,6 @@ std::optional<System::MatchedBrightnessFit> System::FitStereoBrightnessFromMatch
   const PyramidLevel& host = left.level(0);
   const PyramidLevel& target = right.level(0);
   const float fxb = static_cast<float>(camera_.FxB());
-  const RadialPosition radial(camera_.left.cx, camera_.left.cy, camera_.left.width, camera_.left.height);
   std::vector<double> host_intensity, right_intensity, host_rho_sq;
   int matched_points = 0;
   for (const ImmaturePoint& p : traced) {
@@ -163,14 +161,25 @@ std::optional<System::MatchedBrightnessFit> System::FitStereoBrightnessFromMatch
       if (!left_unclipped.Contains(h) || !right_unclipped.Contains(r)) continue;
       host_intensity.push_back(h);
       right_intensity.push_back(r);
-      host_rho_sq.push_back(radial.Sq(p.u + dx, p.v + dy));
+      host_rho_sq.push_back(radial_position_.Sq(p.u + dx, p.v + dy));
     }
   }
   if (matched_points < o.min_matched_points) return std::nullopt;
-  const std::optional<StereoBrightness> transfer =
-      o.estimate_radial ? FitRadialBrightnessTransfer(host_intensity, right_intensity, host_rho_sq, o.huber_threshold,
-                                                      o.max_gain_ratio, o.max_radial)
-                        : FitBrightnessTransfer(host_intensity, right_intensity, o.huber_threshold, o.max_gain_ratio);
+  std::optional<StereoBrightness> transfer;
+  double keyframe_radial = 0.0;
+  if (o.estimate_radial) {
+    // The radial term is the lenses' (RadialTermPool): this keyframe's fit pooled with the earlier
+    // keyframes' ones; gain and bias, which auto exposure moves, are this keyframe's own.
+    const std::optional<double> radial =
+        FitRadialTerm(host_intensity, right_intensity, host_rho_sq, o.huber_threshold, o.max_radial);
+    if (!radial) return std::nullopt;
+    keyframe_radial = *radial;
+    transfer = FitBrightnessTransferAtRadial(host_intensity, right_intensity, host_rho_sq,
+                                             radial_pool_.MedianWith(keyframe_radial), o.huber_threshold,
+                                             o.max_gain_ratio);
+  } else {
+    transfer = FitBrightnessTransfer(host_intensity, right_intensity, o.huber_threshold, o.max_gain_ratio);
+  }
   if (!transfer) return std::nullopt;
   // The intensity range the fit speaks for: 2nd to 98th percentile of the left samples.
   std::vector<double> sorted = host_intensity;
@@ -178,7 +187,7 @@ std::optional<System::MatchedBrightnessFit> System::FitStereoBrightnessFromMatch
   std::nth_element(sorted.begin(), sorted.begin() + i_lo, sorted.end());
   const double low = sorted[i_lo];
   std::nth_element(sorted.begin(), sorted.begin() + i_hi, sorted.end());
-  return MatchedBrightnessFit{*transfer, low, sorted[i_hi]};
+  return MatchedBrightnessFit{*transfer, low, sorted[i_hi], keyframe_radial};
 }
 
 std::vector<ImmaturePoint> System::MatchStaticStereo(int keyframe_id, std::vector<ImmaturePoint> points,
@@ -187,6 +196,7 @@ std::vector<ImmaturePoint> System::MatchStaticStereo(int keyframe_id, std::vecto
   const StereoBrightnessOptions& o = options_.stereo_brightness;
   StereoBrightness transfer = start;
   bool refitted = false;
+  std::optional<double> keyframe_radial;  // the last refit's own radial term
   std::vector<ImmaturePoint> traced = TraceStaticStereo(points, right, transfer);
   if (o.estimate && o.max_matching_passes > 1) {
     const UnclippedRange left_unclipped = UnclippedIntensityRange(left.level(0));
@@ -199,6 +209,7 @@ std::vector<ImmaturePoint> System::MatchStaticStereo(int keyframe_id, std::vecto
       const double change = BrightnessTransferChange(transfer, fit->transfer, fit->low, fit->high);
       transfer = fit->transfer;
       refitted = true;
+      if (o.estimate_radial) keyframe_radial = fit->keyframe_radial;
       if (change <= o.rematch_change) break;
       traced = TraceStaticStereo(points, right, transfer);
     }
@@ -207,6 +218,7 @@ std::vector<ImmaturePoint> System::MatchStaticStereo(int keyframe_id, std::vecto
   // again (a wrong start would otherwise be handed on from keyframe to keyframe).
   last_right_brightness_ = transfer;
   have_right_brightness_ = refitted;
+  if (keyframe_radial) radial_pool_.Add(*keyframe_radial);
   window_->SetRightBrightness(keyframe_id, transfer);
   return traced;
 }
