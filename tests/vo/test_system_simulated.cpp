@@ -6,12 +6,14 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <vector>
 
 #include "core/alignment.h"
+#include "core/error.h"
 #include "core/simulator.h"
 #include "tests/dvso_cli_runner.h"
 #include "tests/vo/simulated_sequence.h"
@@ -37,6 +39,7 @@ struct RunOutcome {
   int keyframe_candidates = 0, keyframe_candidates_within_1px = 0;  // OnKeyframeCandidates against the GT
   double stereo_gain = 0, stereo_bias = 0;  // the last frame's reported brightness transfer of the pair
   std::vector<double> stereo_radial;        // every frame's reported radial term
+  std::vector<FrameEvent> keyframe_events;  // the events of the frames that became keyframes
 };
 
 // The right camera's response: I -> gain (1 + radial rho^2) I + bias, rho^2 at the right pixel relative to
@@ -80,9 +83,11 @@ class LastFrameObserver : public OdometryObserver {
   void OnFrameTracked(const FrameEvent& event) override {
     last = event;
     stereo_radial.push_back(event.stereo_radial);
+    if (event.status == FrameStatus::kKeyframe) keyframes.push_back(event);
   }
   FrameEvent last;
   std::vector<double> stereo_radial;  // every frame's reported radial term of the pair's transfer
+  std::vector<FrameEvent> keyframes;  // the events of the frames that became keyframes
 };
 
 // Compares the stereo-matched keyframe candidates (OnKeyframeCandidates) with the exact disparity.
@@ -132,6 +137,7 @@ RunOutcome RunSystem(OdometryMode mode, const OdometryOptions& options = {}, con
   r.stereo_gain = last_frame.last.stereo_gain;
   r.stereo_bias = last_frame.last.stereo_bias;
   r.stereo_radial = last_frame.stereo_radial;
+  r.keyframe_events = last_frame.keyframes;
   return r;
 }
 
@@ -209,6 +215,7 @@ TEST(SystemSimulated, StereoStaysMetricWithARightCameraOfAnotherGainAndBlackLeve
 // The spread (largest - smallest) of the reported radial term over the second half of a run, when the
 // transfer has been refitted at several keyframes.
 double SecondHalfSpread(const std::vector<double>& values) {
+  Require(values.size() >= 2, "SecondHalfSpread: fewer than 2 values");
   const auto [lo, hi] = std::minmax_element(values.begin() + values.size() / 2, values.end());
   return *hi - *lo;
 }
@@ -228,6 +235,21 @@ TEST(SystemSimulated, StereoFindsARightLensWithAnotherVignettingAndPoolsItOverKe
   EXPECT_LT(max_err, 0.02 * seq.path_length) << "max error " << max_err << " m over " << seq.path_length << " m";
   ASSERT_EQ(r.stereo_radial.size(), seq.truth.size());
   EXPECT_NEAR(r.stereo_radial.back(), 0.25, 0.05);
+  // Every keyframe uses the median of the keyframes' own fits so far (the pool holds more than this run's
+  // keyframes): the pool is fed each keyframe's own fit, not the pooled value.
+  std::vector<double> own_fits;
+  for (const FrameEvent& e : r.keyframe_events) {
+    if (!std::isnan(e.stereo_radial_keyframe)) own_fits.push_back(e.stereo_radial_keyframe);
+    if (own_fits.empty()) continue;
+    std::vector<double> sorted = own_fits;
+    std::sort(sorted.begin(), sorted.end());
+    const size_t n = sorted.size();
+    const double median = n % 2 == 1 ? sorted[n / 2] : 0.5 * (sorted[n / 2 - 1] + sorted[n / 2]);
+    EXPECT_NEAR(e.stereo_radial, median, 1e-12) << "keyframe at frame " << e.frame_index;
+  }
+  EXPECT_GE(own_fits.size(), 5u);
+  EXPECT_GT(*std::max_element(own_fits.begin(), own_fits.end()) - *std::min_element(own_fits.begin(), own_fits.end()),
+            0.0);  // the keyframes' own fits differ: the medians above are not trivially equal
 
   OdometryOptions per_keyframe = pooled;
   per_keyframe.stereo_brightness.radial_pool_keyframes = 0;

@@ -54,7 +54,6 @@ template <typename Scalar>
 struct BasicRadialPosition {
   Scalar cx = 0, cy = 0, inv_corner_sq = 0;
   BasicRadialPosition() = default;
-  BasicRadialPosition(Scalar cx_, Scalar cy_, Scalar inv_corner_sq_) : cx(cx_), cy(cy_), inv_corner_sq(inv_corner_sq_) {}
   explicit BasicRadialPosition(const PinholeCamera& camera)
       : cx(static_cast<Scalar>(camera.cx)),
         cy(static_cast<Scalar>(camera.cy)),
@@ -82,7 +81,8 @@ struct StereoBrightnessOptions {
   double max_radial = 0.8;          // a fitted |radial| above this is implausible: the fit is refused
   int radial_pool_keyframes = 1000; // the radial term is a lens property: each keyframe uses the median of its own
                                     // fit and those of up to this many earlier keyframes (0: its own fit alone;
-                                    // 50 still wandered by +-0.05 with the scene, docs/labels.md "Session 29")
+                                    // a median of 50 still wandered from -0.05 to +0.065 with the scene, docs/labels.md
+                                    // "Session 29")
   void Check() const;
 };
 
@@ -111,10 +111,11 @@ std::optional<StereoBrightness> FitBrightnessTransferAtRadial(const std::vector<
 
 // The radial term pooled over keyframes. It is a property of the two lenses, constant in time (gain
 // and bias are not: auto exposure moves them between keyframes), while one keyframe's fit of it is
-// noisy and pulled by the scene (identical lenses: -0.05 to +0.065 between the keyframes of one
-// 500-frame world, and a median over 50 keyframes still follows the scene, docs/labels.md "Session 29").
-// The median of many keyframes' fits with the current one averages the scene out and keeps keyframes
-// whose matches lie on one surface from moving it. Memory is bounded by the capacity.
+// noisy and pulled by the scene (identical lenses: -0.049 to +0.012 between the keyframes of one
+// world, docs/labels.md "Session 28"; even a median over 50 keyframes still wandered from -0.05 to
+// +0.065 along a 500-frame world, "Session 29"). The median over many keyframes is robust to the
+// scenes of a few, and a keyframe whose own fit is refused (its matches have too little spread in
+// rho^2) still gets the pooled term. Memory is bounded by the capacity.
 class RadialTermPool {
  public:
   explicit RadialTermPool(int capacity = 0);
@@ -122,6 +123,8 @@ class RadialTermPool {
   void Add(double keyframe_radial);
   // Median of the stored fits and `current` (the mean of the two middle values for an even count).
   double MedianWith(double current) const;
+  // Median of the stored fits alone; requires size() > 0.
+  double Median() const;
   int size() const { return static_cast<int>(fits_.size()); }
 
  private:

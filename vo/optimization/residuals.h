@@ -22,6 +22,7 @@
 #include <Eigen/Core>
 
 #include "vo/optimization/frame_parameters.h"
+#include "vo/frame/stereo_brightness.h"
 #include "vo/optimization/photometric_kernel.h"
 #include "vo/optimization/window.h"
 

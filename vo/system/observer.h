@@ -47,9 +47,12 @@ struct FrameEvent {
   double virtual_stereo_energy = 0;
   // Stereo mode: the newest stereo keyframe's brightness transfer I_right ~ gain * (1 + radial rho^2) *
   // I_left + bias (vo/frame/stereo_brightness.h); 1, 0, 0 until the first one and in the other modes.
+  // stereo_radial is the radial term used (pooled over keyframes, RadialTermPool), and
+  // stereo_radial_keyframe that keyframe's own fit of it (NaN where it had none, 0 with the term off).
   double stereo_gain = 1.0;
   double stereo_bias = 0.0;
   double stereo_radial = 0.0;
+  double stereo_radial_keyframe = 0.0;
 };
 
 struct PointInfo {

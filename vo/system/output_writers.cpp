@@ -72,7 +72,7 @@ RunLogWriter::RunLogWriter(const std::string& csv_path)
   RequireFile(out_.good(), partial_path_, "cannot write run log");
   out_ << "frame,timestamp,status,segment,reference,track_ms,optimize_ms,total_ms,rmse,hypotheses,"
           "window_keyframes,active_points,immature_points,keyframe_score,rmse_ratio,"
-          "virtual_stereo_residuals,virtual_stereo_energy,stereo_gain,stereo_bias,stereo_radial,rss_mb\n";
+          "virtual_stereo_residuals,virtual_stereo_energy,stereo_gain,stereo_bias,stereo_radial,stereo_radial_keyframe,rss_mb\n";
 }
 
 RunLogWriter::~RunLogWriter() {
@@ -89,7 +89,7 @@ void RunLogWriter::OnFrameTracked(const FrameEvent& e) {
        << e.optimize_ms << ',' << e.total_ms << ',' << e.tracking_rmse << ',' << e.hypotheses_tried << ','
        << e.window_keyframes << ',' << e.active_points << ',' << e.immature_points << ',' << e.keyframe_score << ','
        << e.rmse_ratio << ',' << e.virtual_stereo_residuals << ',' << e.virtual_stereo_energy << ','
-       << e.stereo_gain << ',' << e.stereo_bias << ',' << e.stereo_radial << ','
+       << e.stereo_gain << ',' << e.stereo_bias << ',' << e.stereo_radial << ',' << e.stereo_radial_keyframe << ','
        << std::setprecision(4) << ResidentSetMegabytes() << '\n';
 }
 

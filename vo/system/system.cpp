@@ -38,9 +38,9 @@ System::System(const OdometryOptions& options, const StereoCamera& camera, Odome
       predictions_(predictions),
       prediction_timing_(ParsePredictionTiming(options.dvso.prediction_timing)),
       tracker_(options.tracker),
-      radial_pool_(options.stereo_brightness.radial_pool_keyframes),
       radial_position_(camera.left) {
   options_.Check();
+  radial_pool_ = RadialTermPool(options_.stereo_brightness.radial_pool_keyframes);
   camera_.left.Check();
   if (capabilities_.has_right_image) Require(camera_.baseline > 0, "stereo odometry needs a baseline > 0");
   if (capabilities_.has_predictions) {
@@ -131,6 +131,7 @@ FrameEvent System::ProcessFrame(int frame_index, double timestamp, const cv::Mat
   ev.stereo_gain = last_right_brightness_.gain;
   ev.stereo_bias = last_right_brightness_.bias;
   ev.stereo_radial = last_right_brightness_.radial;
+  ev.stereo_radial_keyframe = last_keyframe_radial_;
   current_left_image_.release();
   last_T_world_camera_ = ev.T_world_camera;
   for (OdometryObserver* o : observers_) o->OnFrameTracked(ev);
@@ -152,6 +153,7 @@ FrameEvent System::ReportUnreadableFrame(int frame_index, double timestamp) {
   ev.stereo_gain = last_right_brightness_.gain;
   ev.stereo_bias = last_right_brightness_.bias;
   ev.stereo_radial = last_right_brightness_.radial;
+  ev.stereo_radial_keyframe = last_keyframe_radial_;
   for (OdometryObserver* o : observers_) o->OnFrameTracked(ev);
   return ev;
 }

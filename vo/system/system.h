@@ -112,7 +112,8 @@ class System {
   struct MatchedBrightnessFit {
     StereoBrightness transfer;
     double low = 0, high = 0;
-    double keyframe_radial = 0;  // this keyframe's own radial fit (transfer.radial is the pooled one)
+    std::optional<double> keyframe_radial;  // this keyframe's own radial fit, where it has one (transfer.radial
+                                            // is the pooled one)
   };
   std::optional<MatchedBrightnessFit> FitStereoBrightnessFromMatches(const std::vector<ImmaturePoint>& traced,
                                                                      const ImagePyramid& left,
@@ -167,6 +168,7 @@ class System {
   StereoBrightness last_right_brightness_;  // the last stereo keyframe's transfer (reported in FrameEvent)
   bool have_right_brightness_ = false;      // it was refitted from matches: the next keyframe starts from it
   RadialTermPool radial_pool_;              // earlier keyframes' radial fits (a lens property: kept over resets)
+  double last_keyframe_radial_ = 0.0;       // the last stereo keyframe's own radial fit (reported in FrameEvent)
   RadialPosition radial_position_;          // rho^2 of a left pixel (the brightness transfer's radial term)
   double selector_block_size_ = 0;  // pixel selector block size that worked for the last keyframe
   int reference_id_ = -1;        // keyframe id the tracker uses

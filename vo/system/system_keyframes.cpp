@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <optional>
 
 #include "core/disparity_conversion.h"
@@ -97,7 +98,16 @@ StereoBrightness System::StartingStereoBrightness(const ImagePyramid& left, cons
   // The previous stereo keyframe's refitted transfer (the same rig, a similar exposure);
   // the first keyframe starts from the images' quantiles.
   if (have_right_brightness_) return last_right_brightness_;
-  return EstimateStereoBrightness(left.level(0), right.level(0), options_.stereo_brightness);
+  StereoBrightness start = EstimateStereoBrightness(left.level(0), right.level(0), options_.stereo_brightness);
+  // The quantiles cannot see a radial term, but the lenses' pooled one (kept over resets) is known. The
+  // quantile gain holds the term's mean over the image (rho^2 averages 1/3 over an image centred on the
+  // principal point), which the radial factor would otherwise count twice.
+  if (options_.stereo_brightness.estimate_radial && radial_pool_.size() > 0) {
+    constexpr double kMeanRhoSqOverTheImage = 1.0 / 3.0;  // E[(x^2 + y^2) / ((W^2 + H^2) / 4)], uniform x, y
+    start.radial = radial_pool_.Median();
+    start.gain /= 1.0 + start.radial * kMeanRhoSqOverTheImage;
+  }
+  return start;
 }
 
 std::vector<ImmaturePoint> System::TraceStaticStereo(const std::vector<ImmaturePoint>& points,
@@ -166,16 +176,15 @@ std::optional<System::MatchedBrightnessFit> System::FitStereoBrightnessFromMatch
   }
   if (matched_points < o.min_matched_points) return std::nullopt;
   std::optional<StereoBrightness> transfer;
-  double keyframe_radial = 0.0;
+  std::optional<double> keyframe_radial;
   if (o.estimate_radial) {
     // The radial term is the lenses' (RadialTermPool): this keyframe's fit pooled with the earlier
-    // keyframes' ones; gain and bias, which auto exposure moves, are this keyframe's own.
-    const std::optional<double> radial =
-        FitRadialTerm(host_intensity, right_intensity, host_rho_sq, o.huber_threshold, o.max_radial);
-    if (!radial) return std::nullopt;
-    keyframe_radial = *radial;
-    transfer = FitBrightnessTransferAtRadial(host_intensity, right_intensity, host_rho_sq,
-                                             radial_pool_.MedianWith(keyframe_radial), o.huber_threshold,
+    // keyframes' ones, or the pool alone where this keyframe's fit is refused; gain and bias, which
+    // auto exposure moves, are this keyframe's own.
+    keyframe_radial = FitRadialTerm(host_intensity, right_intensity, host_rho_sq, o.huber_threshold, o.max_radial);
+    if (!keyframe_radial && radial_pool_.size() == 0) return std::nullopt;
+    const double radial = keyframe_radial ? radial_pool_.MedianWith(*keyframe_radial) : radial_pool_.Median();
+    transfer = FitBrightnessTransferAtRadial(host_intensity, right_intensity, host_rho_sq, radial, o.huber_threshold,
                                              o.max_gain_ratio);
   } else {
     transfer = FitBrightnessTransfer(host_intensity, right_intensity, o.huber_threshold, o.max_gain_ratio);
@@ -209,7 +218,7 @@ std::vector<ImmaturePoint> System::MatchStaticStereo(int keyframe_id, std::vecto
       const double change = BrightnessTransferChange(transfer, fit->transfer, fit->low, fit->high);
       transfer = fit->transfer;
       refitted = true;
-      if (o.estimate_radial) keyframe_radial = fit->keyframe_radial;
+      keyframe_radial = fit->keyframe_radial;
       if (change <= o.rematch_change) break;
       traced = TraceStaticStereo(points, right, transfer);
     }
@@ -218,6 +227,7 @@ std::vector<ImmaturePoint> System::MatchStaticStereo(int keyframe_id, std::vecto
   // again (a wrong start would otherwise be handed on from keyframe to keyframe).
   last_right_brightness_ = transfer;
   have_right_brightness_ = refitted;
+  last_keyframe_radial_ = !o.estimate_radial ? 0.0 : keyframe_radial.value_or(std::numeric_limits<double>::quiet_NaN());
   if (keyframe_radial) radial_pool_.Add(*keyframe_radial);
   window_->SetRightBrightness(keyframe_id, transfer);
   return traced;
