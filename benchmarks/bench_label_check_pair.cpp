@@ -33,6 +33,7 @@
 #include "core/camera.h"
 #include "core/disparity_io.h"
 #include "core/error.h"
+#include "core/statistics.h"
 #include "sdso_labels/label_error_kinds.h"
 #include "sdso_labels/label_writer.h"
 #include "sdso_labels/stereo_check.h"
@@ -84,13 +85,6 @@ struct PairResult {
     return all;
   }
 };
-
-double Median(std::vector<double> values) {
-  if (values.empty()) return 0.0;
-  const size_t mid = values.size() / 2;
-  std::nth_element(values.begin(), values.begin() + mid, values.end());
-  return values[mid];
-}
 
 cv::Mat ReadGrey(const std::string& path) {
   cv::Mat image = cv::imread(path, cv::IMREAD_GRAYSCALE);
@@ -185,7 +179,8 @@ void Print(const std::string& name, const PairResult& r, bool with_offsets) {
   if (with_offsets) {
     std::printf("  best match - GT at right labels: median %+.2f px, median |.| %.2f px, within 0.5 / 1 / 3 px "
                 "%.1f / %.1f / %.1f %% of %zu\n",
-                Median(offsets), Median(magnitudes), share_within(0.5), share_within(1.0), share_within(3.0),
+                offsets.empty() ? 0.0 : dvso::Median(offsets), magnitudes.empty() ? 0.0 : dvso::Median(magnitudes),
+                share_within(0.5), share_within(1.0), share_within(3.0),
                 magnitudes.size());
   }
   std::printf("  silhouette labels kept   %6.2f %% of %ld  (nearer 4-neighbour's disparity on the pixel)\n",

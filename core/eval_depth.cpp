@@ -17,6 +17,7 @@
 #include "core/depth_split.h"
 #include "core/disparity_io.h"
 #include "core/error.h"
+#include "core/statistics.h"
 #include "core/fs_util.h"
 #include "core/kitti_raw_calibration.h"
 
@@ -29,15 +30,6 @@ namespace {
 std::string Lower(std::string s) {
   std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   return s;
-}
-
-// numpy.median semantics: mean of the two middle values for even counts.
-double Median(std::vector<double> values) {
-  const size_t mid = values.size() / 2;
-  std::nth_element(values.begin(), values.begin() + mid, values.end());
-  const double upper = values[mid];
-  if (values.size() % 2 == 1) return upper;
-  return 0.5 * (upper + *std::max_element(values.begin(), values.begin() + mid));
 }
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();

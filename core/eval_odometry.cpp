@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "core/error.h"
+#include "core/statistics.h"
 #include "core/lie.h"
 
 namespace dvso {
@@ -22,16 +23,6 @@ void RequireIncreasingTimestamps(const Trajectory& trajectory, const std::string
                 std::to_string(trajectory.poses[i].timestamp) + " after " +
                 std::to_string(trajectory.poses[i - 1].timestamp));
   }
-}
-
-double Median(std::vector<double> values) {
-  if (values.empty()) return 0.0;
-  const size_t mid = values.size() / 2;
-  std::nth_element(values.begin(), values.begin() + mid, values.end());
-  const double upper = values[mid];
-  if (values.size() % 2 == 1) return upper;
-  const double lower = *std::max_element(values.begin(), values.begin() + mid);
-  return 0.5 * (lower + upper);
 }
 
 // Devkit trajectoryDistances: cumulative GT path length up to each frame.
@@ -245,7 +236,7 @@ OdometryMetrics EvaluateOdometry(const Trajectory& gt, const Trajectory& est,
   }
   m.ate_rmse = std::sqrt(sum_sq / ate.size());
   m.ate_mean = sum / ate.size();
-  m.ate_median = Median(ate);
+  m.ate_median = ate.empty() ? 0.0 : Median(ate);
 
   // RPE over GT frame pairs (i, i + delta), the TUM RGB-D benchmark's relative pose error.
   m.rpe_delta_frames = options.rpe_delta_frames;

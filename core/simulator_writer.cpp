@@ -6,6 +6,7 @@
 //   calib.txt times.txt poses.txt (GT, first frame = identity)
 //   exposures.txt       per frame: index, gain, bias (DSO affine brightness)
 //   vignette.png        V(x) as uint16 (65535 = 1), when vignetting is on
+//   vignette_right.png  the right lens's V(x), when it has its own (--right-vignetting)
 //   simulation.yaml     the options and world statistics of the run
 // The metadata files of an earlier run in the folder are removed first and this
 // run's are written last, so an interrupted run is recognisably incomplete; every
@@ -97,7 +98,20 @@ namespace {
 // The files written after every frame, in the order written; together they make the folder a sequence
 // that readers accept (calib.txt and times.txt at least).
 const std::vector<std::string> kMetadataFiles = {"calib.txt", "times.txt", "poses.txt", "exposures.txt",
-                                                 "vignette.png", "simulation.yaml"};
+                                                 "vignette.png", "vignette_right.png", "simulation.yaml"};
+
+// V(x) = 1 - strength * r^2 / half_diagonal^2 (the renderer's fall-off) as a uint16 PNG (65535 = 1).
+void WriteVignettePng(const std::string& path, const PinholeCamera& c, double strength) {
+  cv::Mat vignette(c.height, c.width, CV_16UC1);
+  const double half_diagonal_sq = 0.25 * (static_cast<double>(c.width) * c.width + static_cast<double>(c.height) * c.height);
+  for (int y = 0; y < c.height; ++y)
+    for (int x = 0; x < c.width; ++x) {
+      const double r2 = (x - c.cx) * (x - c.cx) + (y - c.cy) * (y - c.cy);
+      vignette.at<uint16_t>(y, x) =
+          static_cast<uint16_t>(std::lround(65535.0 * std::max(0.0, 1.0 - strength * r2 / half_diagonal_sq)));
+    }
+  WritePng(path, vignette);
+}
 
 // Removes `path` if it exists; throws dvso::Error naming it when it cannot be removed.
 void RemoveEarlierRunFile(const std::string& path) {
@@ -213,16 +227,11 @@ SimulationSummary WriteSimulatedSequence(const SimulatorOptions& options, const 
     }
   });
   if (options.vignetting) {
-    const PinholeCamera& c = options.camera.left;
-    cv::Mat vignette(c.height, c.width, CV_16UC1);
-    const double half_diagonal_sq = 0.25 * (static_cast<double>(c.width) * c.width + static_cast<double>(c.height) * c.height);
-    for (int y = 0; y < c.height; ++y)
-      for (int x = 0; x < c.width; ++x) {
-        const double r2 = (x - c.cx) * (x - c.cx) + (y - c.cy) * (y - c.cy);
-        vignette.at<uint16_t>(y, x) =
-            static_cast<uint16_t>(std::lround(65535.0 * std::max(0.0, 1.0 - options.vignetting_strength * r2 / half_diagonal_sq)));
-      }
-    WritePng(JoinPath(output_dir, "vignette.png"), vignette);
+    WriteVignettePng(JoinPath(output_dir, "vignette.png"), options.camera.left, options.vignetting_strength);
+    if (options.right_vignetting_strength >= 0) {
+      WriteVignettePng(JoinPath(output_dir, "vignette_right.png"), options.camera.left,
+                       options.right_vignetting_strength);
+    }
   }
   // (Without vignetting there is no vignette.png: an earlier vignetted run's map, which would make a
   // photometric calibration correct images that have none, went with the other metadata at the start.)

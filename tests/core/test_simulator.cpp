@@ -356,6 +356,7 @@ TEST(Simulator, WritesKittiLayoutWithGroundTruth) {
   o.stride = 2;
   o.exposure_drift = true;
   o.vignetting = true;
+  o.right_vignetting_strength = 0.1;  // the right lens has its own fall-off: written as vignette_right.png
   const SimulationSummary summary = WriteSimulatedSequence(o, dir.string(), false);
   EXPECT_EQ(summary.frames, 3);
   for (const char* sub : {"image_0", "image_1", "depth_0", "disp_0", "disp_1"})
@@ -392,7 +393,16 @@ TEST(Simulator, WritesKittiLayoutWithGroundTruth) {
   EXPECT_EQ(reader->size(), 3);
   EXPECT_EQ(reader->Read(2).left.cols, 160);
   EXPECT_TRUE(fs::exists(dir / "exposures.txt"));
-  EXPECT_TRUE(fs::exists(dir / "vignette.png"));
+  // Each lens's V(x) = 1 - strength r^2 / half_diagonal^2, at the top-left pixel (r measured from the
+  // principal point) by hand.
+  const PinholeCamera& c = o.camera.left;
+  const double corner_r2_ratio = (c.cx * c.cx + c.cy * c.cy) / (0.25 * (160.0 * 160.0 + 48.0 * 48.0));
+  const cv::Mat left_vignette = cv::imread((dir / "vignette.png").string(), cv::IMREAD_UNCHANGED);
+  const cv::Mat right_vignette = cv::imread((dir / "vignette_right.png").string(), cv::IMREAD_UNCHANGED);
+  ASSERT_FALSE(left_vignette.empty());
+  ASSERT_FALSE(right_vignette.empty());
+  EXPECT_NEAR(left_vignette.at<uint16_t>(0, 0), 65535.0 * (1 - o.vignetting_strength * corner_r2_ratio), 1.0);
+  EXPECT_NEAR(right_vignette.at<uint16_t>(0, 0), 65535.0 * (1 - 0.1 * corner_r2_ratio), 1.0);
 
   // A rerun into the same folder without vignetting leaves no vignette map of the first run; with a
   // 9.5 m baseline at 480x144 the near road has disparities beyond the PNG's 255.996 px: invalid (0),
@@ -405,6 +415,7 @@ TEST(Simulator, WritesKittiLayoutWithGroundTruth) {
   o.camera.baseline = 9.5;
   WriteSimulatedSequence(o, dir.string(), false);
   EXPECT_FALSE(fs::exists(dir / "vignette.png"));
+  EXPECT_FALSE(fs::exists(dir / "vignette_right.png"));
   const double fx_b = o.camera.left.fx * o.camera.baseline;
   int beyond = 0, right = 0;
   for (const char* sub : {"disp_0", "disp_1"}) {

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "core/statistics.h"
 
 namespace dvso::vo {
 
@@ -154,28 +155,15 @@ void RadialTermPool::Add(double keyframe_radial) {
   if (static_cast<int>(fits_.size()) > capacity_) fits_.pop_front();
 }
 
-namespace {
-
-double MedianOf(std::vector<double> values) {
-  const size_t middle = values.size() / 2;
-  std::nth_element(values.begin(), values.begin() + middle, values.end());
-  const double upper = values[middle];
-  if (values.size() % 2 == 1) return upper;
-  const double lower = *std::max_element(values.begin(), values.begin() + middle);
-  return 0.5 * (lower + upper);
-}
-
-}  // namespace
-
 double RadialTermPool::MedianWith(double current) const {
   std::vector<double> values(fits_.begin(), fits_.end());
   values.push_back(current);
-  return MedianOf(std::move(values));
+  return dvso::Median(std::move(values));
 }
 
 double RadialTermPool::Median() const {
   Require(!fits_.empty(), "RadialTermPool::Median: the pool is empty");
-  return MedianOf(std::vector<double>(fits_.begin(), fits_.end()));
+  return dvso::Median(std::vector<double>(fits_.begin(), fits_.end()));
 }
 
 double BrightnessTransferChange(const StereoBrightness& a, const StereoBrightness& b, double low, double high) {

@@ -71,6 +71,7 @@ struct OdometryOptions {
   int max_consecutive_lost = 1000000; // give up (error) after this many consecutive lost frames
   std::string gamma_file;             // optional inverse response (DSO pcalib.txt), empty = none
   std::string vignette_file;          // optional vignette PNG, empty = none
+  std::string right_vignette_file;    // stereo: the right lens's own vignette PNG, empty = vignette_file for both
 
   ImagePyramidOptions pyramid;
   StereoBrightnessOptions stereo_brightness;  // the right camera's brightness transfer (stereo mode)

@@ -31,6 +31,7 @@ void VisitFields(Options& o, Visitor&& v) {
   v("", "max_consecutive_lost", o.max_consecutive_lost);
   v("", "gamma_file", o.gamma_file);
   v("", "vignette_file", o.vignette_file);
+  v("", "right_vignette_file", o.right_vignette_file);
 
   v("pyramid", "max_levels", o.pyramid.max_levels);
   v("pyramid", "min_top_level_pixels", o.pyramid.min_top_level_pixels);

@@ -53,6 +53,12 @@ System::System(const OdometryOptions& options, const StereoCamera& camera, Odome
     calibration_ = std::make_unique<PhotometricCalibration>(
         PhotometricCalibration::Load(options_.gamma_file, options_.vignette_file));
   }
+  if (!options_.right_vignette_file.empty()) {
+    Require(capabilities_.has_right_image, "right_vignette_file is for stereo odometry (" + ToString(mode_) +
+                                               " odometry reads no right image)");
+    right_calibration_ = std::make_unique<PhotometricCalibration>(
+        PhotometricCalibration::Load(options_.gamma_file, options_.right_vignette_file));
+  }
   activation_cell_ = InitialActivationCell();
 }
 
@@ -69,6 +75,11 @@ void System::AddObserver(OdometryObserver* observer) {
 
 ImagePyramidPtr System::MakePyramid(const cv::Mat& image) const {
   return std::make_shared<ImagePyramid>(image, camera_.left, options_.pyramid, calibration_.get());
+}
+
+ImagePyramidPtr System::MakeRightPyramid(const cv::Mat& image) const {
+  const PhotometricCalibration* calibration = right_calibration_ ? right_calibration_.get() : calibration_.get();
+  return std::make_shared<ImagePyramid>(image, camera_.left, options_.pyramid, calibration);
 }
 
 Eigen::Isometry3d System::ReferenceWorldToCamera() const {
@@ -264,7 +275,7 @@ void System::InitializeMetric(int frame_index, const ImagePyramidPtr& left, cons
   input.left = left;
   KeyframePrediction prediction;
   if (capabilities_.has_right_image) {
-    input.right = MakePyramid(right);
+    input.right = MakeRightPyramid(right);
     input.right_brightness = StartingStereoBrightness(*left, *input.right);
   }
   if (capabilities_.has_predictions) {

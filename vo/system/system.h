@@ -66,6 +66,8 @@ class System {
   };
 
   ImagePyramidPtr MakePyramid(const cv::Mat& image) const;
+  // The right image's pyramid: its own lens's vignette when right_vignette_file is set.
+  ImagePyramidPtr MakeRightPyramid(const cv::Mat& image) const;
   KeyframePrediction FetchPrediction(int frame_index, const cv::Mat& image);
   // A tracked frame that candidates can be traced against.
   struct TraceTarget {
@@ -147,7 +149,8 @@ class System {
   cv::Mat current_left_image_;   // the frame being processed (predictions are asked for it)
   int virtual_stereo_residuals_ = 0;
   double virtual_stereo_energy_ = 0;
-  std::unique_ptr<PhotometricCalibration> calibration_;
+  std::unique_ptr<PhotometricCalibration> calibration_;        // left (and right without its own file)
+  std::unique_ptr<PhotometricCalibration> right_calibration_;  // right_vignette_file's (null: calibration_)
   std::vector<OdometryObserver*> observers_;
 
   std::unique_ptr<Window> window_;

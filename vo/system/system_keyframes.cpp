@@ -36,7 +36,7 @@ void System::MakeKeyframe(int frame_index, const ImagePyramidPtr& left, const cv
   ImagePyramidPtr right_pyr;
   StereoBrightness right_brightness;
   if (capabilities_.has_right_image && !right.empty()) {
-    right_pyr = MakePyramid(right);
+    right_pyr = MakeRightPyramid(right);
     right_brightness = StartingStereoBrightness(*left, *right_pyr);
   }
   KeyframePrediction prediction;  // stays empty while a keyframe-async prediction is pending

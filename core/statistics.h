@@ -1,0 +1,12 @@
+// Small statistics shared by the evaluation, the odometry and the benchmarks.
+#pragma once
+
+#include <vector>
+
+namespace dvso {
+
+// Median with numpy.median's semantics: the mean of the two middle values for an even count.
+// Throws dvso::Error for no values (callers decide what an empty set means).
+double Median(std::vector<double> values);
+
+}  // namespace dvso
