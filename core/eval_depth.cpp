@@ -17,9 +17,9 @@
 #include "core/depth_split.h"
 #include "core/disparity_io.h"
 #include "core/error.h"
-#include "core/statistics.h"
 #include "core/fs_util.h"
 #include "core/kitti_raw_calibration.h"
+#include "core/statistics.h"
 
 namespace dvso {
 

@@ -7,8 +7,8 @@
 #include <sstream>
 
 #include "core/error.h"
-#include "core/statistics.h"
 #include "core/lie.h"
+#include "core/statistics.h"
 
 namespace dvso {
 

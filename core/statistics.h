@@ -1,4 +1,6 @@
-// Small statistics shared by the evaluation, the odometry and the benchmarks.
+// Small statistics shared by the evaluation, the stereo brightness transfer and the benchmarks. (The label
+// writer's float median and the mono initialiser's upper median are their own: changing them would change
+// labels and initialisations.)
 #pragma once
 
 #include <vector>
