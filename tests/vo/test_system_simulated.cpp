@@ -16,6 +16,7 @@
 #include "core/alignment.h"
 #include "core/error.h"
 #include "core/simulator.h"
+#include "core/statistics.h"
 #include "tests/dvso_cli_runner.h"
 #include "tests/vo/simulated_sequence.h"
 #include "core/trajectory.h"
@@ -242,11 +243,7 @@ TEST(SystemSimulated, StereoFindsARightLensWithAnotherVignettingAndPoolsItOverKe
   for (const FrameEvent& e : r.keyframe_events) {
     if (!std::isnan(e.stereo_radial_keyframe)) own_fits.push_back(e.stereo_radial_keyframe);
     if (own_fits.empty()) continue;
-    std::vector<double> sorted = own_fits;
-    std::sort(sorted.begin(), sorted.end());
-    const size_t n = sorted.size();
-    const double median = n % 2 == 1 ? sorted[n / 2] : 0.5 * (sorted[n / 2 - 1] + sorted[n / 2]);
-    EXPECT_NEAR(e.stereo_radial, median, 1e-12) << "keyframe at frame " << e.frame_index;
+    EXPECT_NEAR(e.stereo_radial, Median(own_fits), 1e-12) << "keyframe at frame " << e.frame_index;
   }
   EXPECT_GE(own_fits.size(), 5u);
   EXPECT_GT(*std::max_element(own_fits.begin(), own_fits.end()) - *std::min_element(own_fits.begin(), own_fits.end()),

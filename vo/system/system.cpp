@@ -139,14 +139,18 @@ FrameEvent System::ProcessFrame(int frame_index, double timestamp, const cv::Mat
   for (const auto& c : candidates_) ev.immature_points += static_cast<int>(c.points.size());
   ev.virtual_stereo_residuals = virtual_stereo_residuals_;
   ev.virtual_stereo_energy = virtual_stereo_energy_;
-  ev.stereo_gain = last_right_brightness_.gain;
-  ev.stereo_bias = last_right_brightness_.bias;
-  ev.stereo_radial = last_right_brightness_.radial;
-  ev.stereo_radial_keyframe = last_keyframe_radial_;
+  ReportStereoBrightness(&ev);
   current_left_image_.release();
   last_T_world_camera_ = ev.T_world_camera;
   for (OdometryObserver* o : observers_) o->OnFrameTracked(ev);
   return ev;
+}
+
+void System::ReportStereoBrightness(FrameEvent* ev) const {
+  ev->stereo_gain = last_right_brightness_.gain;
+  ev->stereo_bias = last_right_brightness_.bias;
+  ev->stereo_radial = last_right_brightness_.radial;
+  ev->stereo_radial_keyframe = last_keyframe_radial_;
 }
 
 FrameEvent System::ReportUnreadableFrame(int frame_index, double timestamp) {
@@ -161,10 +165,7 @@ FrameEvent System::ReportUnreadableFrame(int frame_index, double timestamp) {
     ev.window_keyframes = window_->num_keyframes();
     ev.active_points = window_->num_points();
   }
-  ev.stereo_gain = last_right_brightness_.gain;
-  ev.stereo_bias = last_right_brightness_.bias;
-  ev.stereo_radial = last_right_brightness_.radial;
-  ev.stereo_radial_keyframe = last_keyframe_radial_;
+  ReportStereoBrightness(&ev);
   for (OdometryObserver* o : observers_) o->OnFrameTracked(ev);
   return ev;
 }

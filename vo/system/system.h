@@ -66,6 +66,8 @@ class System {
   };
 
   ImagePyramidPtr MakePyramid(const cv::Mat& image) const;
+  // The newest stereo keyframe's brightness transfer into a frame's event (every frame reports it).
+  void ReportStereoBrightness(FrameEvent* ev) const;
   // The right image's pyramid: its own lens's vignette when right_vignette_file is set.
   ImagePyramidPtr MakeRightPyramid(const cv::Mat& image) const;
   KeyframePrediction FetchPrediction(int frame_index, const cv::Mat& image);
