@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "core/vignette.h"
 
 namespace dvso::sim {
 namespace {
@@ -177,7 +178,8 @@ RenderedView Renderer::Render(const Eigen::Isometry3d& T_world_camera, const Pho
   out.depth.create(height, width, CV_32FC1);
   if (with_color) out.color.create(height, width, CV_8UC3);
   const float min_inverse_depth = static_cast<float>(1.0 / max_distance_);
-  const double half_diagonal_sq = 0.25 * (static_cast<double>(width) * width + static_cast<double>(height) * height);
+  const RadialPosition radial_position(camera_);
+  const RadialVignette lens{{-photometric.vignetting_strength}};
   const double pixel_angle = 1.0 / std::max(fx, fy);
   const float scale = static_cast<float>(255.0 * photometric.gain);
 
@@ -318,8 +320,7 @@ RenderedView Renderer::Render(const Eigen::Isometry3d& T_world_camera, const Pho
           radiance = sum / 5.f;  // centre + 4 sub-samples
         }
         // Camera: exposure gain/bias, vignetting, noise, 8-bit quantisation.
-        const double r2 = (x - cx) * (x - cx) + (y - cy) * (y - cy);
-        const float vignette = static_cast<float>(std::max(0.0, 1.0 - photometric.vignetting_strength * r2 / half_diagonal_sq));
+        const float vignette = static_cast<float>(lens.At(radial_position.Sq(x, y)));
         const float k = scale * vignette;
         const float bias = static_cast<float>(photometric.bias);
         const float lum = 0.299f * radiance.x() + 0.587f * radiance.y() + 0.114f * radiance.z();

@@ -22,7 +22,7 @@ namespace dvso::sim {
 struct Photometric {
   double gain = 1.0;                // exposure gain (e^a in DSO's affine model)
   double bias = 0.0;                // additive brightness offset (grey levels)
-  double vignetting_strength = 0;   // V(x) = 1 - strength * (r / r_corner)^2
+  double vignetting_strength = 0;   // V(x) = 1 - strength * rho^2 (RadialVignette{{-strength}}, core/vignette.h)
   double noise_sigma = 0;           // std of additive noise (grey levels); 0 = none
   uint64_t noise_seed = 0;          // noise stream (frame and view specific)
 };

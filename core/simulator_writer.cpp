@@ -34,6 +34,7 @@
 #include "core/sequence.h"
 #include "core/simulator.h"
 #include "core/trajectory.h"
+#include "core/vignette.h"
 
 namespace dvso {
 namespace {
@@ -100,17 +101,9 @@ namespace {
 const std::vector<std::string> kMetadataFiles = {"calib.txt", "times.txt", "poses.txt", "exposures.txt",
                                                  "vignette.png", "vignette_right.png", "simulation.yaml"};
 
-// V(x) = 1 - strength * r^2 / half_diagonal^2 (the renderer's fall-off) as a uint16 PNG (65535 = 1).
+// V(x) = 1 - strength * rho^2 (the renderer's fall-off) as a uint16 PNG (65535 = 1).
 void WriteVignettePng(const std::string& path, const PinholeCamera& c, double strength) {
-  cv::Mat vignette(c.height, c.width, CV_16UC1);
-  const double half_diagonal_sq = 0.25 * (static_cast<double>(c.width) * c.width + static_cast<double>(c.height) * c.height);
-  for (int y = 0; y < c.height; ++y)
-    for (int x = 0; x < c.width; ++x) {
-      const double r2 = (x - c.cx) * (x - c.cx) + (y - c.cy) * (y - c.cy);
-      vignette.at<uint16_t>(y, x) =
-          static_cast<uint16_t>(std::lround(65535.0 * std::max(0.0, 1.0 - strength * r2 / half_diagonal_sq)));
-    }
-  WritePng(path, vignette);
+  RadialVignette{{-strength}}.WritePng(path, c);
 }
 
 // Removes `path` if it exists; throws dvso::Error naming it when it cannot be removed.

@@ -32,6 +32,7 @@ void AddAblationCommand(CLI::App& app);      // cmd_ablation.cpp
 void AddTuneBaselineCommand(CLI::App& app);  // cmd_tune_baseline.cpp
 void AddOxtsPosesCommand(CLI::App& app);     // cmd_oxts_poses.cpp
 void AddGtDepthCommand(CLI::App& app);       // cmd_gt_depth.cpp
+void AddCalibrateVignetteCommand(CLI::App& app);  // cmd_calibrate_vignette.cpp
 #ifdef DVSO_WITH_TORCH
 void AddTrainCommand(CLI::App& app);    // torch_cmd_train.cpp
 void AddExportCommand(CLI::App& app);   // torch_cmd_export.cpp

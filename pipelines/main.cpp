@@ -21,6 +21,7 @@ int main(int argc, char** argv) {
   dvso::cli::AddTuneBaselineCommand(app);
   dvso::cli::AddOxtsPosesCommand(app);
   dvso::cli::AddGtDepthCommand(app);
+  dvso::cli::AddCalibrateVignetteCommand(app);
 #ifdef DVSO_WITH_TORCH
   dvso::cli::AddTrainCommand(app);
   dvso::cli::AddExportCommand(app);

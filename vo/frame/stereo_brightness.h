@@ -29,6 +29,7 @@
 #include <vector>
 
 #include "core/camera.h"
+#include "core/vignette.h"
 #include "vo/frame/image_pyramid.h"
 
 namespace dvso::vo {
@@ -46,22 +47,7 @@ struct StereoBrightness {
   double Gain(double rho_sq) const { return gain * (1.0 + radial * rho_sq); }
 };
 
-// rho^2 = ((u - cx)^2 + (v - cy)^2) / r_corner^2 with r_corner^2 = (width^2 + height^2) / 4 (the image's
-// half diagonal, the simulator's vignetting convention): 0 at the principal point, about 1 in the corners.
-// The one implementation of rho^2: the stereo search and the brightness fit use it in double, the static
-// stereo residual in float (BasicRadialPosition<float>, vo/optimization/residuals.h).
-template <typename Scalar>
-struct BasicRadialPosition {
-  Scalar cx = 0, cy = 0, inv_corner_sq = 0;
-  BasicRadialPosition() = default;
-  explicit BasicRadialPosition(const PinholeCamera& camera)
-      : cx(static_cast<Scalar>(camera.cx)),
-        cy(static_cast<Scalar>(camera.cy)),
-        inv_corner_sq(static_cast<Scalar>(4.0 / (static_cast<double>(camera.width) * camera.width +
-                                                 static_cast<double>(camera.height) * camera.height))) {}
-  Scalar Sq(Scalar u, Scalar v) const { return ((u - cx) * (u - cx) + (v - cy) * (v - cy)) * inv_corner_sq; }
-};
-using RadialPosition = BasicRadialPosition<double>;
+// rho^2: RadialPosition (core/vignette.h).
 
 struct StereoBrightnessOptions {
   bool estimate = true;             // false: identical cameras assumed (gain 1, bias 0; the behaviour until session 27)

@@ -1,0 +1,80 @@
+// `dvso calibrate-vignette` end to end (vo/system/vignette_calibration.h) on short simulated sequences at a
+// small size: the lens's fall-off is found where the simulator put one and not found where it put none, and
+// the written vignette.png is a vignette_file the odometry reads.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <memory>
+
+#include "core/error.h"
+#include "core/fs_util.h"
+#include "core/sequence.h"
+#include "core/simulator.h"
+#include "vo/frame/photometric_calibration.h"
+#include "vo/system/vignette_calibration.h"
+#include "tests/temp_dir.h"
+
+namespace dvso::vo {
+namespace {
+
+constexpr int kFrames = 80;
+constexpr int kWidth = 640, kHeight = 192;  // at 416x128 the fall-off is underestimated by half (see below)
+
+std::string SimulatedSequence(const std::string& name, bool vignetting) {
+  const std::string out = dvso::testing::ScratchPath(name);
+  SimulatorOptions o;
+  o.trajectory_path = std::string(DVSO_TEST_DATA_DIR) + "/kitti_poses/00.txt";
+  o.num_frames = kFrames;
+  o.camera = StereoCamera{}.Resized(kWidth, kHeight);
+  o.texture_size = 256;
+  o.vignetting = vignetting;
+  o.vignetting_strength = 0.3;
+  WriteSimulatedSequence(o, out, false);
+  return out;
+}
+
+VignetteCalibration Calibrate(const std::string& sequence_dir, const std::string& out) {
+  const std::unique_ptr<SequenceReader> sequence = OpenSequence(sequence_dir);
+  SequenceRunOptions run;
+  run.progress = false;
+  return CalibrateVignette(*sequence, OdometryOptions{}, OdometryMode::kStereo, out, run);
+}
+
+// Measured with the simulator's lens V = 1 - 0.3 rho^2 (0.70 at the half diagonal): the fit finds 0.73
+// (stereo) and 0.75 (mono) at KITTI's 1241x376 over 300 frames, 0.78 at 832x256, 0.81 here (640x192, 80
+// frames) and 0.84 at 416x128; on a lens without fall-off 1.006 (1241x376), 1.02 here. Smaller images bias
+// it towards 1 (docs/odometry.md, "Vignetting"), so this test asks for a clear fall-off, not its exact value.
+TEST(VignetteCalibration, FindsTheSimulatedLensFallOffAndNoneWhereThereIsNone) {
+  const std::string lens_seq = SimulatedSequence("vignette_calibration_lens", true);
+  const std::string flat_seq = SimulatedSequence("vignette_calibration_flat", false);
+  const std::string out = lens_seq + "_calibration";
+  const VignetteCalibration lens = Calibrate(lens_seq, out);
+  const VignetteCalibration flat = Calibrate(flat_seq, flat_seq + "_calibration");
+  EXPECT_EQ(lens.segments, 1);
+  EXPECT_GT(lens.keyframes, 10);
+  EXPECT_GT(lens.fit.points, 1000);
+  EXPECT_NEAR(lens.fit.vignette.At(1.0), 0.75, 0.1);
+  EXPECT_LT(lens.fit.vignette.At(0.25), 0.97);
+  EXPECT_LT(lens.fit.rms, lens.fit.rms_without_vignette);
+  EXPECT_NEAR(flat.fit.vignette.At(1.0), 1.0, 0.05);
+  EXPECT_NEAR(flat.fit.vignette.At(0.25), 1.0, 0.02);
+  EXPECT_GT(flat.fit.vignette.At(1.0) - lens.fit.vignette.At(1.0), 0.15);
+
+  WriteVignetteCalibration(out, lens);
+  for (const char* name : {"vignette.png", "vignette_fit.yaml", "vignette_profile.png", "trajectory.txt"})
+    EXPECT_TRUE(std::filesystem::exists(JoinPath(out, name))) << name;
+  // vignette.png is a vignette_file: it brightens the corners by 1 / V of the fit.
+  const PhotometricCalibration fitted = PhotometricCalibration::Load("", JoinPath(out, "vignette.png"));
+  const cv::Mat corrected = fitted.Correct(cv::Mat(kHeight, kWidth, CV_8UC1, cv::Scalar(100)));
+  const cv::Mat expected = 100.0 / lens.fit.vignette.Image(lens.camera);
+  EXPECT_LT(cv::norm(corrected, expected, cv::NORM_INF), 0.01);
+
+  // A vignette in the config would calibrate already corrected images: refused.
+  OdometryOptions with_vignette;
+  with_vignette.vignette_file = JoinPath(lens_seq, "vignette.png");
+  const std::unique_ptr<SequenceReader> sequence = OpenSequence(lens_seq);
+  EXPECT_THROW(CalibrateVignette(*sequence, with_vignette, OdometryMode::kStereo, out, {}), Error);
+}
+
+}  // namespace
+}  // namespace dvso::vo
