@@ -37,10 +37,11 @@ struct RadialVignette {
   double At(double rho_sq) const;
   // d V / d coefficients[i] = rho^(2 (i + 1)) where V > 0 (the fit's Jacobian).
   double Derivative(int i, double rho_sq) const;
-  // V at every pixel of `camera`'s image, divided by its maximum over the image (DSO's and
-  // PhotometricCalibration's convention: the brightest pixel is 1), as CV_32F.
+  // V at every pixel of `camera`'s image as CV_32F, divided by its maximum over the image when that exceeds 1
+  // (DSO's and PhotometricCalibration's convention: the brightest pixel is 1; a falling lens's brightest
+  // pixel is already within 1e-7 of it).
   cv::Mat Image(const PinholeCamera& camera) const;
-  // Image() as a uint16 PNG (65535 = 1), the format `vignette_file` reads. Throws dvso::Error naming the path.
+  // Image() as a uint16 PNG (round(65535 V), computed in double), the format `vignette_file` reads. Throws dvso::Error naming the path.
   void WritePng(const std::string& path, const PinholeCamera& camera) const;
 };
 

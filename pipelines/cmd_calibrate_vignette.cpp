@@ -17,7 +17,7 @@ namespace {
 struct CalibrateVignetteArgs {
   std::string sequence, mode = "auto", config, out, camera_file, cameras = "grey";
   int first = 0;
-  int count = -1;
+  int count = 500;  // the fit is dense in the keyframes: a few hundred frames suffice and stay quick
   bool no_progress = false;
   vo::VignetteCalibrationOptions calibration;
 };
@@ -65,18 +65,23 @@ void AddCalibrateVignetteCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--config", args->config, "Odometry YAML options (strict keys; no vignette_file)");
   cmd->add_option("--first", args->first, "First frame index");
-  cmd->add_option("--count", args->count, "Number of frames (-1 = all; a few hundred suffice)");
+  cmd->add_option("--count", args->count,
+                  "Number of frames (-1 = all; the fit's system is dense in the keyframes, so thousands take long)")
+      ->capture_default_str();
   cmd->add_option("--camera", args->camera_file, "DSO camera file (image-folder sequences only)");
   cmd->add_option("--cameras", args->cameras, "KITTI layouts: grey (00/01) or colour (02/03, read as grey) pair")
       ->capture_default_str();
   cmd->add_option("--coefficients", args->calibration.fit.num_coefficients,
                   "Polynomial terms of V in rho^2 (0-4)")
+      ->check(CLI::Range(0, 4))
       ->capture_default_str();
   cmd->add_option("--neighbour-keyframes", args->calibration.neighbour_keyframes,
                   "A point is sampled in this many keyframes before and after its host")
+      ->check(Positive())
       ->capture_default_str();
   cmd->add_option("--blur-sigma", args->calibration.blur_sigma,
                   "Gaussian blur (px) of the images before sampling")
+      ->check(NonNegative())
       ->capture_default_str();
   cmd->add_flag("--no-progress", args->no_progress, "No progress bars");
   cmd->callback([args] { Run(*args); });

@@ -1,6 +1,7 @@
 // core/vignette.h by hand: the radial position, the polynomial fall-off and the PNG the odometry reads.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <opencv2/imgcodecs.hpp>
 
@@ -69,6 +70,30 @@ TEST(Vignette, ImageIsNormalisedToItsBrightestPixelAndRoundTripsThroughThePng) {
   ASSERT_EQ(read.type(), CV_16UC1);
   EXPECT_EQ(read.at<uint16_t>(15, 20), 65535);
   EXPECT_NEAR(read.at<uint16_t>(29, 39), 65535.0 * (1 - 0.3 * RadialPosition(c).Sq(39, 29)), 0.51);
+}
+
+// The simulator's vignette.png keeps the values of its own formula from before core/vignette.h, at KITTI's
+// size and principal point (not on a pixel).
+TEST(Vignette, SimulatorLensPngHasTheValuesOfTheRendererFormula) {
+  PinholeCamera c;
+  c.width = 1241;
+  c.height = 376;
+  c.fx = c.fy = 718.856;
+  c.cx = 607.1928;
+  c.cy = 185.2157;
+  const double strength = 0.3;
+  const std::string path = testing::ScratchDir("vignette_kitti") + "/vignette.png";
+  RadialVignette{{-strength}}.WritePng(path, c);
+  const cv::Mat read = cv::imread(path, cv::IMREAD_UNCHANGED);
+  ASSERT_EQ(read.type(), CV_16UC1);
+  const double half_diagonal_sq = 0.25 * (1241.0 * 1241.0 + 376.0 * 376.0);
+  int differing = 0;
+  for (int y = 0; y < c.height; ++y)
+    for (int x = 0; x < c.width; ++x) {
+      const double r2 = (x - c.cx) * (x - c.cx) + (y - c.cy) * (y - c.cy);
+      differing += read.at<uint16_t>(y, x) != std::lround(65535.0 * std::max(0.0, 1.0 - strength * r2 / half_diagonal_sq));
+    }
+  EXPECT_EQ(differing, 0);
 }
 
 }  // namespace

@@ -43,7 +43,7 @@ VignetteCalibration Calibrate(const std::string& sequence_dir, const std::string
 // Measured with the simulator's lens V = 1 - 0.3 rho^2 (0.70 at the half diagonal): the fit finds 0.73
 // (stereo) and 0.75 (mono) at KITTI's 1241x376 over 300 frames, 0.78 at 832x256, 0.81 here (640x192, 80
 // frames) and 0.84 at 416x128; on a lens without fall-off 1.006 (1241x376), 1.02 here. Smaller images bias
-// it towards 1 (docs/odometry.md, "Vignetting"), so this test asks for a clear fall-off, not its exact value.
+// it towards 1 (docs/vignette.md), so this test asks for a clear fall-off, not its exact value.
 TEST(VignetteCalibration, FindsTheSimulatedLensFallOffAndNoneWhereThereIsNone) {
   const std::string lens_seq = SimulatedSequence("vignette_calibration_lens", true);
   const std::string flat_seq = SimulatedSequence("vignette_calibration_flat", false);

@@ -87,7 +87,14 @@ TEST(VignetteFit, LeavesOutPointsSeenTooRarelyAndRejectsBadInput) {
   EXPECT_EQ(fit.observations, static_cast<int>(d.observations.size()) - 2);
   EXPECT_NEAR(fit.vignette.At(1.0), 0.8, 0.005);
 
-  EXPECT_THROW(FitVignette({{0, 5, 0.1, 100}}, 1, 5), Error);  // frame out of range
+  // Three good observations of one point and a fourth out of range (frame, then point index): refused.
+  const std::vector<VignetteObservation> good = {{0, 0, 0.1, 100}, {0, 1, 0.5, 90}, {0, 2, 0.9, 80}};
+  EXPECT_NO_THROW(FitVignette(good, 1, 3));
+  std::vector<VignetteObservation> bad_frame = good, bad_point = good;
+  bad_frame.push_back({0, 3, 0.2, 95});
+  bad_point.push_back({1, 0, 0.2, 95});
+  EXPECT_THROW(FitVignette(bad_frame, 1, 3), Error);
+  EXPECT_THROW(FitVignette(bad_point, 1, 3), Error);
   EXPECT_THROW(FitVignette({{0, 0, 0.1, 100}, {0, 1, 0.2, 90}}, 1, 2), Error);  // no point seen 3 times
   VignetteFitOptions bad;
   bad.num_coefficients = 7;

@@ -11,7 +11,7 @@
 namespace dvso::vo {
 
 void VignetteFitOptions::Check() const {
-  Require(num_coefficients >= 0 && num_coefficients <= 4, "vignette fit: num_coefficients must be in [0, 4]");
+  Require(num_coefficients >= 0 && num_coefficients <= 4, "vignette fit: num_coefficients (--coefficients) must be in [0, 4]");
   Require(huber_threshold > 0, "vignette fit: huber_threshold must be > 0");
   Require(max_iterations >= 1, "vignette fit: max_iterations must be >= 1");
   Require(min_observations_per_point >= 2, "vignette fit: min_observations_per_point must be >= 2");

@@ -18,11 +18,12 @@
 namespace dvso::vo {
 
 void VignetteCalibrationOptions::Check() const {
-  Require(neighbour_keyframes >= 1, "calibrate-vignette: neighbour_keyframes must be >= 1");
-  Require(blur_sigma >= 0, "calibrate-vignette: blur_sigma must be >= 0");
+  Require(neighbour_keyframes >= 1, "calibrate-vignette: --neighbour-keyframes must be >= 1");
+  Require(blur_sigma >= 0, "calibrate-vignette: --blur-sigma must be >= 0");
   Require(border >= 1, "calibrate-vignette: border must be >= 1");
   Require(min_intensity < max_intensity, "calibrate-vignette: min_intensity must be below max_intensity");
   Require(max_points >= 1, "calibrate-vignette: max_points must be >= 1");
+  Require(min_good_residuals >= 0, "calibrate-vignette: min_good_residuals must be >= 0");
   fit.Check();
 }
 
@@ -95,12 +96,22 @@ VignetteCalibration CalibrateVignette(const SequenceReader& sequence, const Odom
   result.segments = collector.segments();
 
   // Keyframes in frame order (DSO marginalises them out of order); a point's host is found by frame index.
-  std::vector<FinalKeyframe> keyframes = collector.keyframes();
+  // Only the longest tracking segment is used: segments share no points, so each would carry its own
+  // exposure scale (a_f R_p), which the fit fixes once (a_0 = 1).
+  Require(!collector.keyframes().empty(), "calibrate-vignette: the odometry made no keyframe");
+  std::map<int, int> keyframes_per_segment;
+  for (const FinalKeyframe& k : collector.keyframes()) ++keyframes_per_segment[k.segment];
+  const int longest_segment =
+      std::max_element(keyframes_per_segment.begin(), keyframes_per_segment.end(),
+                       [](const auto& a, const auto& b) { return a.second < b.second; })->first;
+  std::vector<FinalKeyframe> keyframes;
+  for (const FinalKeyframe& k : collector.keyframes())
+    if (k.segment == longest_segment) keyframes.push_back(k);
   std::sort(keyframes.begin(), keyframes.end(),
             [](const FinalKeyframe& a, const FinalKeyframe& b) { return a.frame_index < b.frame_index; });
   std::map<int, int> position_of_frame;
   for (int i = 0; i < static_cast<int>(keyframes.size()); ++i) position_of_frame[keyframes[i].frame_index] = i;
-  Require(keyframes.size() >= 2, "calibrate-vignette: the odometry made fewer than 2 keyframes");
+  Require(keyframes.size() >= 2, "calibrate-vignette: the odometry made fewer than 2 keyframes in one segment");
 
   // World points, bucketed by their host's position; thinned evenly to max_points.
   const PinholeCamera& camera = result.camera;
@@ -131,7 +142,6 @@ VignetteCalibration CalibrateVignette(const SequenceReader& sequence, const Odom
     if (calibration.blur_sigma > 0) cv::GaussianBlur(image, image, cv::Size(0, 0), calibration.blur_sigma);
     const Eigen::Isometry3d T_camera_world = keyframes[j].T_world_camera.inverse();
     for (int h = std::max(0, j - n); h <= std::min(K - 1, j + n); ++h) {
-      if (keyframes[h].segment != keyframes[j].segment) continue;
       for (const auto& [id, world] : points_of_host[h]) {
         const Eigen::Vector3d X = T_camera_world * world;
         if (X.z() <= 1e-3) continue;

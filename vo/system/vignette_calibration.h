@@ -18,6 +18,7 @@ namespace dvso::vo {
 
 struct VignetteCalibrationOptions {
   int neighbour_keyframes = 5;   // a point is sampled in the keyframes up to this many before and after its host
+                                 // (the fit's dense system couples keyframes this far apart; see --count)
                                  // (DSO's window: the keyframes it was optimised in; farther ones see it from
                                  // far, occluded or through a drifted pose)
   double blur_sigma = 1.5;       // px: Gaussian blur before sampling; points sit on strong gradients, where a
@@ -36,7 +37,7 @@ struct VignetteCalibration {
   VignetteFit fit;
   PinholeCamera camera;   // the left camera the vignette belongs to
   int keyframes = 0;      // keyframes sampled (the fit's frames)
-  int segments = 0;       // tracking segments (1 + resets): points are only sampled in their own segment
+  int segments = 0;       // tracking segments (1 + resets); only the longest one is sampled
   SequenceRunSummary run;
 };
 
