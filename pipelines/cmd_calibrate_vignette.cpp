@@ -1,5 +1,6 @@
 // `dvso calibrate-vignette`: the left lens's vignetting from a recording (vo/system/vignette_calibration.h).
 // Thin: parses options, runs the calibration, writes and summarises its files.
+#include <algorithm>
 #include <iostream>
 #include <memory>
 
@@ -19,6 +20,7 @@ struct CalibrateVignetteArgs {
   int first = 0;
   int count = 500;  // the fit is dense in the keyframes: a few hundred frames suffice and stay quick
   bool no_progress = false;
+  bool count_given = false;
   vo::VignetteCalibrationOptions calibration;
 };
 
@@ -35,7 +37,9 @@ void Run(const CalibrateVignetteArgs& args) {
             << vo::ToString(mode) << " odometry" << (args.config.empty() ? "" : ", config " + args.config) << "\n";
   vo::SequenceRunOptions run;
   run.first = args.first;
-  run.count = args.count;
+  // The default 500 frames, or the rest of a shorter sequence (no past-the-end warning for the default).
+  run.count = args.count_given || args.count < 0 ? args.count
+                                                 : std::min(args.count, std::max(1, sequence->size() - args.first));
   run.progress = !args.no_progress;
   const vo::VignetteCalibration c = vo::CalibrateVignette(*sequence, options, mode, args.out, run, args.calibration);
   vo::WriteVignetteCalibration(args.out, c);
@@ -83,8 +87,15 @@ void AddCalibrateVignetteCommand(CLI::App& app) {
                   "Gaussian blur (px) of the images before sampling")
       ->check(NonNegative())
       ->capture_default_str();
+  cmd->add_option("--max-sample-gradient", args->calibration.max_sample_gradient,
+                  "Samples where the blurred image is steeper (grey levels / px) are dropped; 0 = keep all")
+      ->check(NonNegative())
+      ->capture_default_str();
   cmd->add_flag("--no-progress", args->no_progress, "No progress bars");
-  cmd->callback([args] { Run(*args); });
+  cmd->callback([args, cmd] {
+    args->count_given = cmd->count("--count") > 0;
+    Run(*args);
+  });
 }
 
 }  // namespace dvso::cli

@@ -12,15 +12,17 @@
 namespace dvso {
 namespace {
 
-PinholeCamera SmallCamera() {
+PinholeCamera MakeCamera(int width, int height, double f, double cx, double cy) {
   PinholeCamera c;
-  c.width = 40;
-  c.height = 30;
-  c.fx = c.fy = 50;
-  c.cx = 20;
-  c.cy = 15;
+  c.width = width;
+  c.height = height;
+  c.fx = c.fy = f;
+  c.cx = cx;
+  c.cy = cy;
   return c;
 }
+
+PinholeCamera SmallCamera() { return MakeCamera(40, 30, 50, 20, 15); }
 
 TEST(Vignette, RadialPositionIsZeroAtThePrincipalPointAndOneAtTheHalfDiagonal) {
   const RadialPosition rho(SmallCamera());  // half diagonal: sqrt(20^2 + 15^2) = 25
@@ -75,12 +77,7 @@ TEST(Vignette, ImageIsNormalisedToItsBrightestPixelAndRoundTripsThroughThePng) {
 // The simulator's vignette.png keeps the values of its own formula from before core/vignette.h, at KITTI's
 // size and principal point (not on a pixel).
 TEST(Vignette, SimulatorLensPngHasTheValuesOfTheRendererFormula) {
-  PinholeCamera c;
-  c.width = 1241;
-  c.height = 376;
-  c.fx = c.fy = 718.856;
-  c.cx = 607.1928;
-  c.cy = 185.2157;
+  const PinholeCamera c = MakeCamera(1241, 376, 718.856, 607.1928, 185.2157);
   const double strength = 0.3;
   const std::string path = testing::ScratchDir("vignette_kitti") + "/vignette.png";
   RadialVignette{{-strength}}.WritePng(path, c);

@@ -273,14 +273,7 @@ TEST(SystemSimulated, RightVignetteFileCorrectsTheRightLensAlone) {
   const std::string dir = dvso::testing::ScratchPath("right_vignette");
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
-  cv::Mat vignette(c.height, c.width, CV_16UC1);
-  const RadialPosition rho(c);
-  for (int v = 0; v < c.height; ++v) {
-    for (int u = 0; u < c.width; ++u) {
-      vignette.at<uint16_t>(v, u) = static_cast<uint16_t>(std::lround(65535.0 * (1.0 - 0.3 * rho.Sq(u, v))));
-    }
-  }
-  ASSERT_TRUE(cv::imwrite(dir + "/vignette_right.png", vignette));
+  RadialVignette{{-0.3}}.WritePng(dir + "/vignette_right.png", c);
   OdometryOptions with_file;
   with_file.right_vignette_file = dir + "/vignette_right.png";
   const RunOutcome r = RunSystem(OdometryMode::kStereo, with_file, right_lens);
@@ -300,6 +293,20 @@ TEST(SystemSimulated, RightVignetteFileCorrectsTheRightLensAlone) {
   EXPECT_LT(without.stereo_gain * 120.0 + without.stereo_bias, 0.97 * 120.0);
   // Mono odometry reads no right image: a right vignette file there is a mistake, said so.
   EXPECT_THROW(System(with_file, seq.camera, OdometryMode::kMono), Error);
+  // A map of another size is refused when the odometry starts, naming the key and the file.
+  RadialVignette{{-0.3}}.WritePng(dir + "/vignette_small.png", seq.camera.left.Resized(c.width / 2, c.height / 2));
+  for (const bool right : {false, true}) {
+    OdometryOptions wrong_size;
+    (right ? wrong_size.right_vignette_file : wrong_size.vignette_file) = dir + "/vignette_small.png";
+    try {
+      System(wrong_size, seq.camera, OdometryMode::kStereo);
+      ADD_FAILURE() << "a vignette of another size was accepted";
+    } catch (const Error& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find(right ? "right_vignette_file" : "vignette_file"), std::string::npos) << what;
+      EXPECT_NE(what.find("vignette_small.png"), std::string::npos) << what;
+    }
+  }
 }
 
 TEST(SystemSimulated, MonoTracksWithBoundedSim3Error) {

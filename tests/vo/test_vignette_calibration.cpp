@@ -26,7 +26,6 @@ std::string SimulatedSequence(const std::string& name, bool vignetting) {
   o.trajectory_path = std::string(DVSO_TEST_DATA_DIR) + "/kitti_poses/00.txt";
   o.num_frames = kFrames;
   o.camera = StereoCamera{}.Resized(kWidth, kHeight);
-  o.texture_size = 256;
   o.vignetting = vignetting;
   o.vignetting_strength = 0.3;
   WriteSimulatedSequence(o, out, false);
@@ -40,10 +39,10 @@ VignetteCalibration Calibrate(const std::string& sequence_dir, const std::string
   return CalibrateVignette(*sequence, OdometryOptions{}, OdometryMode::kStereo, out, run);
 }
 
-// Measured with the simulator's lens V = 1 - 0.3 rho^2 (0.70 at the half diagonal): the fit finds 0.73
-// (stereo) and 0.75 (mono) at KITTI's 1241x376 over 300 frames, 0.78 at 832x256, 0.81 here (640x192, 80
-// frames) and 0.84 at 416x128; on a lens without fall-off 1.006 (1241x376), 1.02 here. Smaller images bias
-// it towards 1 (docs/vignette.md), so this test asks for a clear fall-off, not its exact value.
+// Measured with the simulator's lens V = 1 - 0.3 rho^2 (0.70 at the half diagonal): the fit finds 0.733
+// (stereo) at KITTI's 1241x376 over 300 frames, 0.754 here (640x192, 80 frames) and 0.82 at 416x128; on a
+// lens without fall-off 1.0005 here. Smaller images bias it towards 1 (docs/vignette.md). Without the
+// steep-sample filter (max_sample_gradient = 0) it found 0.805 and 1.022 here.
 TEST(VignetteCalibration, FindsTheSimulatedLensFallOffAndNoneWhereThereIsNone) {
   const std::string lens_seq = SimulatedSequence("vignette_calibration_lens", true);
   const std::string flat_seq = SimulatedSequence("vignette_calibration_flat", false);
@@ -53,11 +52,11 @@ TEST(VignetteCalibration, FindsTheSimulatedLensFallOffAndNoneWhereThereIsNone) {
   EXPECT_EQ(lens.segments, 1);
   EXPECT_GT(lens.keyframes, 10);
   EXPECT_GT(lens.fit.points, 1000);
-  EXPECT_NEAR(lens.fit.vignette.At(1.0), 0.75, 0.1);
+  EXPECT_NEAR(lens.fit.vignette.At(1.0), 0.73, 0.05);
   EXPECT_LT(lens.fit.vignette.At(0.25), 0.97);
   EXPECT_LT(lens.fit.rms, lens.fit.rms_without_vignette);
-  EXPECT_NEAR(flat.fit.vignette.At(1.0), 1.0, 0.05);
-  EXPECT_NEAR(flat.fit.vignette.At(0.25), 1.0, 0.02);
+  EXPECT_NEAR(flat.fit.vignette.At(1.0), 1.0, 0.01);
+  EXPECT_NEAR(flat.fit.vignette.At(0.25), 1.0, 0.005);
   EXPECT_GT(flat.fit.vignette.At(1.0) - lens.fit.vignette.At(1.0), 0.15);
 
   WriteVignetteCalibration(out, lens);

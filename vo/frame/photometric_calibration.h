@@ -24,6 +24,7 @@ class PhotometricCalibration {
 
   const std::array<float, 256>& inverse_response() const { return inverse_response_; }
   bool has_vignette() const { return !inverse_vignette_.empty(); }
+  cv::Size vignette_size() const { return inverse_vignette_.size(); }  // 0 x 0 without a vignette
 
  private:
   std::array<float, 256> inverse_response_{};

@@ -52,14 +52,27 @@ System::System(const OdometryOptions& options, const StereoCamera& camera, Odome
   if (!options_.gamma_file.empty() || !options_.vignette_file.empty()) {
     calibration_ = std::make_unique<PhotometricCalibration>(
         PhotometricCalibration::Load(options_.gamma_file, options_.vignette_file));
+    RequireVignetteOfImageSize(*calibration_, "vignette_file", options_.vignette_file);
   }
   if (!options_.right_vignette_file.empty()) {
     Require(capabilities_.has_right_image, "right_vignette_file is for stereo odometry (" + ToString(mode_) +
                                                " odometry reads no right image)");
     right_calibration_ = std::make_unique<PhotometricCalibration>(
         PhotometricCalibration::Load(options_.gamma_file, options_.right_vignette_file));
+    RequireVignetteOfImageSize(*right_calibration_, "right_vignette_file", options_.right_vignette_file);
   }
   activation_cell_ = InitialActivationCell();
+}
+
+// At the start, not at the first image: a map of another size (another camera's, or one for the
+// uncropped sensor) is a configuration error, named by its key.
+void System::RequireVignetteOfImageSize(const PhotometricCalibration& calibration, const std::string& key,
+                                        const std::string& file) const {
+  if (!calibration.has_vignette()) return;
+  const cv::Size size = calibration.vignette_size();
+  RequireFile(size == cv::Size(camera_.left.width, camera_.left.height), file,
+              key + " is " + std::to_string(size.width) + "x" + std::to_string(size.height) + " but the images are " +
+                  std::to_string(camera_.left.width) + "x" + std::to_string(camera_.left.height));
 }
 
 double System::InitialActivationCell() const {

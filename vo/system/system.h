@@ -140,6 +140,9 @@ class System {
   Eigen::Isometry3d ReferenceWorldToCamera() const;
   // DSO's starting activation grid cell: about active_points cells over the image.
   double InitialActivationCell() const;
+  // A vignette map of another size than the images: dvso::Error naming the key and the file.
+  void RequireVignetteOfImageSize(const PhotometricCalibration& calibration, const std::string& key,
+                                  const std::string& file) const;
 
   OdometryOptions options_;
   StereoCamera camera_;

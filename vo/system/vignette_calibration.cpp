@@ -21,6 +21,7 @@ void VignetteCalibrationOptions::Check() const {
   Require(neighbour_keyframes >= 1, "calibrate-vignette: --neighbour-keyframes must be >= 1");
   Require(blur_sigma >= 0, "calibrate-vignette: --blur-sigma must be >= 0");
   Require(border >= 1, "calibrate-vignette: border must be >= 1");
+  Require(max_sample_gradient >= 0, "calibrate-vignette: --max-sample-gradient must be >= 0");
   Require(min_intensity < max_intensity, "calibrate-vignette: min_intensity must be below max_intensity");
   Require(max_points >= 1, "calibrate-vignette: max_points must be >= 1");
   Require(min_good_residuals >= 0, "calibrate-vignette: min_good_residuals must be >= 0");
@@ -148,6 +149,11 @@ VignetteCalibration CalibrateVignette(const SequenceReader& sequence, const Odom
         const Eigen::Vector2d uv = camera.Project(X);
         if (!camera.InImage(uv.x(), uv.y(), calibration.border)) continue;
         const float intensity = SampleBilinear(image, uv.x(), uv.y());
+        if (calibration.max_sample_gradient > 0) {
+          const double gx = 0.5 * (SampleBilinear(image, uv.x() + 1, uv.y()) - SampleBilinear(image, uv.x() - 1, uv.y()));
+          const double gy = 0.5 * (SampleBilinear(image, uv.x(), uv.y() + 1) - SampleBilinear(image, uv.x(), uv.y() - 1));
+          if (std::hypot(gx, gy) > calibration.max_sample_gradient) continue;
+        }
         if (intensity < calibration.min_intensity || intensity > calibration.max_intensity) continue;
         observations.push_back({id, j, rho.Sq(uv.x(), uv.y()), intensity});
       }
