@@ -83,8 +83,8 @@ void AddCalibrateVignetteCommand(CLI::App& app) {
                   "A point is sampled in this many keyframes before and after its host")
       ->check(Positive())
       ->capture_default_str();
-  cmd->add_option("--blur-sigma", args->calibration.blur_sigma,
-                  "Gaussian blur (px) of the images before sampling")
+  cmd->add_option("--blur-fraction", args->calibration.blur_fraction,
+                  "Gaussian blur before sampling, sigma as a fraction of the image width")
       ->check(NonNegative())
       ->capture_default_str();
   cmd->add_option("--max-sample-gradient", args->calibration.max_sample_gradient,

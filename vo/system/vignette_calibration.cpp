@@ -19,7 +19,7 @@ namespace dvso::vo {
 
 void VignetteCalibrationOptions::Check() const {
   Require(neighbour_keyframes >= 1, "calibrate-vignette: --neighbour-keyframes must be >= 1");
-  Require(blur_sigma >= 0, "calibrate-vignette: --blur-sigma must be >= 0");
+  Require(blur_fraction >= 0 && blur_fraction < 0.1, "calibrate-vignette: --blur-fraction must be in [0, 0.1)");
   Require(border >= 1, "calibrate-vignette: border must be >= 1");
   Require(max_sample_gradient >= 0, "calibrate-vignette: --max-sample-gradient must be >= 0");
   Require(min_intensity < max_intensity, "calibrate-vignette: min_intensity must be below max_intensity");
@@ -132,6 +132,7 @@ VignetteCalibration CalibrateVignette(const SequenceReader& sequence, const Odom
   // Sample every point in the keyframes around its host (same segment), image by image.
   const PhotometricCalibration response = PhotometricCalibration::Load(options.gamma_file, "");
   const RadialPosition rho(camera);
+  const double blur_sigma = calibration.blur_fraction * camera.width;
   const int n = calibration.neighbour_keyframes, K = static_cast<int>(keyframes.size());
   std::vector<VignetteObservation> observations;
   SequenceReadOptions read;
@@ -140,7 +141,7 @@ VignetteCalibration CalibrateVignette(const SequenceReader& sequence, const Odom
   if (run.progress) bar = std::make_unique<ProgressBar>("sampling keyframes", K);
   for (int j = 0; j < K; ++j) {
     cv::Mat image = response.Correct(sequence.Read(keyframes[j].frame_index, read).left);
-    if (calibration.blur_sigma > 0) cv::GaussianBlur(image, image, cv::Size(0, 0), calibration.blur_sigma);
+    if (blur_sigma > 0) cv::GaussianBlur(image, image, cv::Size(0, 0), blur_sigma);
     const Eigen::Isometry3d T_camera_world = keyframes[j].T_world_camera.inverse();
     for (int h = std::max(0, j - n); h <= std::min(K - 1, j + n); ++h) {
       for (const auto& [id, world] : points_of_host[h]) {
@@ -174,7 +175,8 @@ void WriteVignetteCalibration(const std::string& out_dir, const VignetteCalibrat
   cv::minMaxLoc(v, &min_v, nullptr);
   WriteStreamAtomically(JoinPath(out_dir, "vignette_fit.yaml"), [&](std::ostream& out) {
     out << std::setprecision(8) << "# dvso calibrate-vignette: V(rho^2) = 1 + sum_i c_i rho^(2 i), rho = 1 at the "
-           "half diagonal from (cx, cy)\ncoefficients: [";
+           "half diagonal from (cx, cy);\n# vignette.png holds V divided by its maximum where that exceeds 1\n"
+           "coefficients: [";
     for (size_t i = 0; i < c.fit.vignette.coefficients.size(); ++i)
       out << (i ? ", " : "") << c.fit.vignette.coefficients[i];
     out << "]\ncentre: [" << c.camera.cx << ", " << c.camera.cy << "]\nimage_size: [" << c.camera.width << ", "
