@@ -38,8 +38,9 @@ void Run(const CalibrateVignetteArgs& args) {
   vo::SequenceRunOptions run;
   run.first = args.first;
   // The default 500 frames, or the rest of a shorter sequence (no past-the-end warning for the default).
-  run.count = args.count_given || args.count < 0 ? args.count
-                                                 : std::min(args.count, std::max(1, sequence->size() - args.first));
+  const bool first_inside = args.first >= 0 && args.first < sequence->size();
+  run.count = args.count_given || args.count < 0 || !first_inside ? args.count
+                                                                  : std::min(args.count, sequence->size() - args.first);
   run.progress = !args.no_progress;
   const vo::VignetteCalibration c = vo::CalibrateVignette(*sequence, options, mode, args.out, run, args.calibration);
   vo::WriteVignetteCalibration(args.out, c);
@@ -85,7 +86,7 @@ void AddCalibrateVignetteCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--blur-fraction", args->calibration.blur_fraction,
                   "Gaussian blur before sampling, sigma as a fraction of the image width")
-      ->check(NonNegative())
+      ->check(CLI::Range(0.0, 0.1))
       ->capture_default_str();
   cmd->add_option("--max-sample-gradient", args->calibration.max_sample_gradient,
                   "Samples where the blurred image is steeper (grey levels / px) are dropped; 0 = keep all")

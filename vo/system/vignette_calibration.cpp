@@ -19,8 +19,8 @@ namespace dvso::vo {
 
 void VignetteCalibrationOptions::Check() const {
   Require(neighbour_keyframes >= 1, "calibrate-vignette: --neighbour-keyframes must be >= 1");
-  Require(blur_fraction >= 0 && blur_fraction < 0.1, "calibrate-vignette: --blur-fraction must be in [0, 0.1)");
-  Require(border >= 1, "calibrate-vignette: border must be >= 1");
+  Require(blur_fraction >= 0 && blur_fraction <= 0.1, "calibrate-vignette: --blur-fraction must be in [0, 0.1]");
+  Require(border >= 2, "calibrate-vignette: border must be >= 2 (the slope is sampled 1 px around a point)");
   Require(max_sample_gradient >= 0, "calibrate-vignette: --max-sample-gradient must be >= 0");
   Require(min_intensity < max_intensity, "calibrate-vignette: min_intensity must be below max_intensity");
   Require(max_points >= 1, "calibrate-vignette: max_points must be >= 1");

@@ -24,8 +24,9 @@ struct VignetteCalibrationOptions {
   double blur_fraction = 0.0024;  // Gaussian blur before sampling, sigma as a fraction of the image width (3 px at
                                   // KITTI's 1241): points sit on strong gradients, where a sub-pixel projection
                                   // error would otherwise change the grey level a lot, while the fall-off is
-                                  // smooth. Relative to the width because the scene's scale per pixel is:
-                                  // 3 px found 0.70-0.71 at 1241x376 and 0.79 at 640x192, 1.5 px 0.75 at both
+                                  // smooth. Relative to the width because the scene's scale per pixel is: on
+                                  // a lens of 0.70, 3 px found 0.70-0.71 at 1241x376 but 0.79 at 640x192,
+                                  // 1.5 px found 0.73-0.79 at 1241x376 but 0.75 at 640x192 (docs/vignette.md)
   int border = 8;                // px kept clear of the image edges (the blur's and the projection's margin)
   double min_intensity = 8;      // grey levels outside [min, max] (after blurring) are dropped: black or
   double max_intensity = 247;    // saturated pixels do not follow the model
