@@ -100,7 +100,8 @@ int Minimise(const Problem& problem, const VignetteFitOptions& options, State* s
         g_r[p] += w * j_r * r;
         if (o.frame > 0) h.emplace_back(gain_index(o.frame), w * j_r * v * radiance);
         h.emplace_back(bias_index(o.frame), w * j_r);
-        for (int i = 0; i < n; ++i) h_c[i] += w * j_r * a * radiance * state->vignette.Derivative(i, o.rho_sq);
+        const size_t first_coefficient = jx.size() - n;  // jx ends with the coefficients' Jacobians
+        for (int i = 0; i < n; ++i) h_c[i] += w * j_r * jx[first_coefficient + i].second;
       }
       for (int i = 0; i < n; ++i) h.emplace_back(coefficient_index(i), h_c[i]);
     }

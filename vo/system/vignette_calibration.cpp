@@ -12,6 +12,7 @@
 #include "core/fs_util.h"
 #include "core/plot.h"
 #include "core/progress.h"
+#include "vo/frame/image_pyramid.h"
 #include "vo/frame/photometric_calibration.h"
 #include "vo/system/observer.h"
 
@@ -20,7 +21,7 @@ namespace dvso::vo {
 void VignetteCalibrationOptions::Check() const {
   Require(neighbour_keyframes >= 1, "calibrate-vignette: --neighbour-keyframes must be >= 1");
   Require(blur_fraction >= 0 && blur_fraction <= 0.1, "calibrate-vignette: --blur-fraction must be in [0, 0.1]");
-  Require(border >= 2, "calibrate-vignette: border must be >= 2 (the slope is sampled 1 px around a point)");
+  Require(border >= 2, "calibrate-vignette: border must be >= 2 (the slope is a central difference around a point)");
   Require(max_sample_gradient >= 0, "calibrate-vignette: --max-sample-gradient must be >= 0");
   Require(min_intensity < max_intensity, "calibrate-vignette: min_intensity must be below max_intensity");
   Require(max_points >= 1, "calibrate-vignette: max_points must be >= 1");
@@ -69,14 +70,6 @@ class VignetteSampleCollector : public OdometryObserver {
   std::vector<HostedPoint> points_;
   std::vector<FinalKeyframe> keyframes_;
 };
-
-float SampleBilinear(const cv::Mat& image, double u, double v) {
-  const int x = static_cast<int>(std::floor(u)), y = static_cast<int>(std::floor(v));
-  const float fx = static_cast<float>(u - x), fy = static_cast<float>(v - y);
-  const float* row0 = image.ptr<float>(y);
-  const float* row1 = image.ptr<float>(y + 1);
-  return (1 - fy) * ((1 - fx) * row0[x] + fx * row0[x + 1]) + fy * ((1 - fx) * row1[x] + fx * row1[x + 1]);
-}
 
 }  // namespace
 
@@ -137,11 +130,16 @@ VignetteCalibration CalibrateVignette(const SequenceReader& sequence, const Odom
   std::vector<VignetteObservation> observations;
   SequenceReadOptions read;
   read.load_right = false;
+  // One pyramid level: the odometry's bilinear (I, dI/dx, dI/dy) of the blurred image, its slope included.
+  ImagePyramidOptions one_level;
+  one_level.max_levels = 1;
   std::unique_ptr<ProgressBar> bar;
   if (run.progress) bar = std::make_unique<ProgressBar>("sampling keyframes", K);
   for (int j = 0; j < K; ++j) {
     cv::Mat image = response.Correct(sequence.Read(keyframes[j].frame_index, read).left);
     if (blur_sigma > 0) cv::GaussianBlur(image, image, cv::Size(0, 0), blur_sigma);
+    const ImagePyramid pyramid(image, camera, one_level);
+    const PyramidLevel& level = pyramid.level(0);
     const Eigen::Isometry3d T_camera_world = keyframes[j].T_world_camera.inverse();
     for (int h = std::max(0, j - n); h <= std::min(K - 1, j + n); ++h) {
       for (const auto& [id, world] : points_of_host[h]) {
@@ -149,12 +147,9 @@ VignetteCalibration CalibrateVignette(const SequenceReader& sequence, const Odom
         if (X.z() <= 1e-3) continue;
         const Eigen::Vector2d uv = camera.Project(X);
         if (!camera.InImage(uv.x(), uv.y(), calibration.border)) continue;
-        const float intensity = SampleBilinear(image, uv.x(), uv.y());
-        if (calibration.max_sample_gradient > 0) {
-          const double gx = 0.5 * (SampleBilinear(image, uv.x() + 1, uv.y()) - SampleBilinear(image, uv.x() - 1, uv.y()));
-          const double gy = 0.5 * (SampleBilinear(image, uv.x(), uv.y() + 1) - SampleBilinear(image, uv.x(), uv.y() - 1));
-          if (std::hypot(gx, gy) > calibration.max_sample_gradient) continue;
-        }
+        const Eigen::Vector3f sample = level.Interpolate(static_cast<float>(uv.x()), static_cast<float>(uv.y()));
+        const float intensity = sample[0];
+        if (calibration.max_sample_gradient > 0 && sample.tail<2>().norm() > calibration.max_sample_gradient) continue;
         if (intensity < calibration.min_intensity || intensity > calibration.max_intensity) continue;
         observations.push_back({id, j, rho.Sq(uv.x(), uv.y()), intensity});
       }
