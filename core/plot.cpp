@@ -49,6 +49,7 @@ std::string TickLabel(double value, double step) {
   return buf;
 }
 
+// align_x / align_y: the point of the text's box placed at anchor, 0 = left / top, 1 = right / bottom.
 void DrawText(cv::Mat* image, const std::string& text, cv::Point anchor, double scale, int thickness,
               double align_x, double align_y) {
   int baseline = 0;
@@ -121,7 +122,7 @@ cv::Mat RenderPlot(const std::vector<PlotSeries>& series, const PlotOptions& opt
     const int u = static_cast<int>(std::lround(to_px(t, y_range.lo).x));
     cv::line(image, {u, area.y}, {u, area.y + area.height}, kGrid, 1);
     cv::line(image, {u, area.y + area.height}, {u, area.y + area.height + 6}, kBlack, 1);
-    DrawText(&image, TickLabel(t, x_step), {u, area.y + area.height + 10}, 0.45, 1, 0.5, 1.0);
+    DrawText(&image, TickLabel(t, x_step), {u, area.y + area.height + 10}, 0.45, 1, 0.5, 0.0);
   }
   for (const double t : y_ticks) {
     const int v = static_cast<int>(std::lround(to_px(x_range.lo, t).y));

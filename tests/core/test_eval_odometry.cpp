@@ -363,5 +363,38 @@ TEST(Plot, RejectsEmptyOrInconsistentSeries) {
   EXPECT_EQ(image.size(), cv::Size(900, 700));
 }
 
+// The x tick labels hang below their tick marks: a label drawn over its mark turned "0.2" into "0!2".
+TEST(Plot, XTickLabelsSitBelowTheirTickMarks) {
+  PlotSeries line;
+  line.x = {0.0, 1.0};
+  line.y = {0.0, 1.0};
+  const cv::Mat image = RenderPlot({line}, PlotOptions{});
+  auto is_dark = [&](int row, int col) {
+    const cv::Vec3b bgr = image.at<cv::Vec3b>(row, col);
+    return bgr[0] < 128 && bgr[1] < 128 && bgr[2] < 128;
+  };
+  // Only the middle half of the columns: the y tick labels left of the axes do not count.
+  const int first_col = image.cols / 4, last_col = 3 * image.cols / 4;
+  auto dark_in_row = [&](int row) {
+    int count = 0;
+    for (int col = first_col; col < last_col; ++col) count += is_dark(row, col);
+    return count;
+  };
+  // The axes' bottom edge is the lowest row that is black nearly all across.
+  int axis_row = -1;
+  for (int row = image.rows - 1; row >= 0 && axis_row < 0; --row) {
+    if (dark_in_row(row) > (last_col - first_col) * 9 / 10) axis_row = row;
+  }
+  ASSERT_GT(axis_row, 0);
+  ASSERT_LT(axis_row + 30, image.rows);
+  const int ticks_in_view = static_cast<int>(NiceTicks(0.0, 1.0, 8).size());
+  for (int row = axis_row + 1; row <= axis_row + 6; ++row) {
+    EXPECT_LE(dark_in_row(row), ticks_in_view) << "row " << row - axis_row << " below the axis holds more than the marks";
+  }
+  int label_pixels = 0;
+  for (int row = axis_row + 8; row <= axis_row + 25; ++row) label_pixels += dark_in_row(row);
+  EXPECT_GT(label_pixels, 5 * ticks_in_view);  // the labels are there, below the marks
+}
+
 }  // namespace
 }  // namespace dvso
