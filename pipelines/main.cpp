@@ -2,9 +2,36 @@
 #include <CLI/CLI.hpp>
 #include <exception>
 #include <iostream>
+#include <string>
 
 #include "core/error.h"
 #include "pipelines/commands.h"
+
+namespace {
+
+// Exit statuses: 0 success (and --help), then one per kind of failure.
+constexpr int kExitError = 1;       // dvso::Error: bad input or a failed run, one line naming the file
+constexpr int kExitUsage = 2;       // the command line itself (unknown option, missing or invalid flag value)
+constexpr int kExitUnexpected = 3;  // anything else (a bug): reported, never a crash
+
+// CLI11's own report is two lines ("<what>" then "Run with --help ..."); ours is the one-line form of every
+// other dvso error, naming the subcommand whose --help lists the options.
+// CLI11 calls a mistyped subcommand "A subcommand is required"; first_argument names it instead.
+int ReportUsageError(const CLI::App& app, const CLI::ParseError& error, const std::string& first_argument) {
+  std::string command = "dvso";
+  for (const CLI::App* sub : app.get_subcommands()) command += " " + sub->get_name();
+  std::string what = error.what();
+  if (app.get_subcommands().empty() && !first_argument.empty() && first_argument[0] != '-') {
+    what = "unknown subcommand '" + first_argument + "'";
+  }
+  for (char& c : what) {
+    if (c == '\n') c = ' ';
+  }
+  std::cerr << "dvso: error: " << what << " (see " << command << " --help)" << std::endl;
+  return kExitUsage;
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"dvso - Deep Virtual Stereo Odometry toolkit"};
@@ -31,13 +58,14 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    if (e.get_exit_code() == static_cast<int>(CLI::ExitCodes::Success)) return app.exit(e);  // --help, --help-all
+    return ReportUsageError(app, e, argc > 1 ? argv[1] : "");
   } catch (const dvso::Error& e) {
     std::cerr << "dvso: error: " << e.what() << std::endl;
-    return 1;
+    return kExitError;
   } catch (const std::exception& e) {
     std::cerr << "dvso: unexpected error: " << e.what() << std::endl;
-    return 2;
+    return kExitUnexpected;
   }
   return 0;
 }

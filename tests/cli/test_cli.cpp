@@ -39,7 +39,28 @@ TEST(Cli, HelpListsEverySubcommand) {
 
 TEST(Cli, UnknownSubcommandFails) {
   const CliRun r = RunDvso("frobnicate");
-  EXPECT_NE(r.exit_code, 0);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(r.out, "dvso: error: unknown subcommand 'frobnicate' (see dvso --help)\n");
+}
+
+// Command-line mistakes are one line like every other error (CLI11 alone prints two and exits 105-109),
+// name the flag and the subcommand whose --help lists the options, and exit 2 (usage).
+TEST(Cli, UsageErrorsAreOneLineNamingTheFlagAndExitTwo) {
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"odometry --mode foo --sequence s --out o", "--mode: foo not in"},
+      {"odometry --out o", "--sequence is required"},
+      {"odometry --sequence s --out o --no-such-flag", "--no-such-flag"},
+      {"eval-odometry --gt a --est b --step x", "--step"},
+      {"", "A subcommand is required"},
+  };
+  for (const auto& [args, expected] : cases) {
+    const CliRun r = RunDvso(args);
+    EXPECT_EQ(r.exit_code, 2) << args << "\n" << r.out;
+    EXPECT_EQ(r.out.rfind("dvso: error: ", 0), 0u) << args << "\n" << r.out;
+    EXPECT_NE(r.out.find(expected), std::string::npos) << args << "\n" << r.out;
+    EXPECT_EQ(r.out.find('\n'), r.out.size() - 1) << args << ": not one line\n" << r.out;
+  }
+  EXPECT_NE(RunDvso("odometry --out o").out.find("(see dvso odometry --help)"), std::string::npos);
 }
 
 TEST(Cli, MissingTrajectoryFileIsOneClearError) {
