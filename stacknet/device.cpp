@@ -33,4 +33,8 @@ torch::Device SelectDevice(const std::string& name, int num_threads) {
   return torch::Device(torch::kCPU);
 }
 
+torch::Tensor ToConvolutionLayout(const torch::Tensor& input, const torch::Device& device) {
+  return device.is_cpu() && input.dim() == 4 ? input.contiguous(at::MemoryFormat::ChannelsLast) : input.contiguous();
+}
+
 }  // namespace dvso::stacknet

@@ -66,9 +66,6 @@ void UseInferenceLayout(torch::jit::Module& module, const torch::Device& device)
   }
 }
 
-torch::Tensor ToInferenceLayout(const torch::Tensor& input, const torch::Device& device) {
-  return device.is_cpu() && input.dim() == 4 ? input.contiguous(at::MemoryFormat::ChannelsLast) : input.contiguous();
-}
 
 LoadedModel LoadModel(const std::string& model_path, const torch::Device& device) {
   torch::jit::ExtraFilesMap extra{{kModelMetadataFile, ""}};

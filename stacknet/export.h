@@ -61,15 +61,13 @@ torch::jit::Module LoadTorchScript(const std::string& path, const torch::Device&
                                    torch::jit::ExtraFilesMap* extra = nullptr);
 
 // Inference memory layout on CPU: the 4-D (convolution) weights of `module` are
-// made channels-last (NHWC) and ToInferenceLayout gives an input the same layout
-// (no copy when it already has it, e.g. an NHWC image viewed as NCHW; other
-// devices: contiguous NCHW).
+// made channels-last (NHWC), as ToConvolutionLayout (device.h) makes the input.
 // LibTorch's oneDNN convolutions then run without reordering every weight and
 // activation from NCHW on each call: about 7 % less time per forward on 2 cores
 // (`dvso bench`, shipped model, 640x192); the outputs are the same numbers.
-// CUDA modules are left as they are.
+// CUDA modules are left as they are. (Training keeps NCHW weights: channels-last
+// weights made LibTorch 1.13's convolution backward corrupt the heap.)
 void UseInferenceLayout(torch::jit::Module& module, const torch::Device& device);
-torch::Tensor ToInferenceLayout(const torch::Tensor& input, const torch::Device& device);
 
 // A TorchScript file from `dvso export`, loaded once: the module and its
 // metadata (the JSON extra file; the input size from the module's attributes

@@ -5,6 +5,7 @@
 #include <numeric>
 
 #include "core/error.h"
+#include "stacknet/device.h"
 #include "stacknet/export.h"
 
 namespace dvso::stacknet {
@@ -37,7 +38,7 @@ LatencyStats MeasureLatency(const torch::jit::Module& loaded, const torch::Devic
   module.to(type);
   UseInferenceLayout(module, device);
   const torch::Tensor input =
-      ToInferenceLayout(torch::rand({options.batch, 3, options.height, options.width}).to(device).to(type), device);
+      ToConvolutionLayout(torch::rand({options.batch, 3, options.height, options.width}).to(device).to(type), device);
   torch::NoGradGuard no_grad;
   auto run_once = [&] {
     const auto start = std::chrono::steady_clock::now();

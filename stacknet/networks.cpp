@@ -132,7 +132,8 @@ StackNetOutput StackNetImpl::forward(const torch::Tensor& left_image) {
     for (auto& t : out.simple.right) t = t.detach();
   }
   const ResidualInputs inputs = MakeResidualInputs(left_image, out.simple.left[0], out.simple.right[0]);
-  const DisparityPyramid residuals = residual->forward(inputs.stacked);
+  // The residual network's input in the image's memory layout (channels-last on the CPU: see ToConvolutionLayout).
+  const DisparityPyramid residuals = residual->forward(inputs.stacked.contiguous(left_image.suggest_memory_format()));
   for (int s = 0; s < out.simple.num_scales(); ++s) {
     out.refined.left.push_back(out.simple.left[s] + residuals.left[s]);
     out.refined.right.push_back(out.simple.right[s] + residuals.right[s]);

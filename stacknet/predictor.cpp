@@ -42,7 +42,7 @@ DisparityPair TorchDisparityPredictor::PredictImage(const cv::Mat& image) {
       torch::from_blob(as_float.data, {1, input_height_, input_width_, 3}, torch::kFloat32).permute({0, 3, 1, 2});
   if (options_.post_process) input = torch::cat({input, input.flip({3})}, 0);
   // The permuted NHWC image already is channels-last: on CPU no copy is made here.
-  input = ToInferenceLayout(input, device_).to(device_);
+  input = ToConvolutionLayout(input, device_).to(device_);
   torch::NoGradGuard no_grad;
   c10::IValue output;
   try {

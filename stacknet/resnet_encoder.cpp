@@ -18,7 +18,11 @@ ResidualUnitImpl::ResidualUnitImpl(int64_t in_channels, int64_t planes, int64_t 
     conv2 = register_module("conv2", MakeConv(planes, planes, 3));
   }
   if (stride != 1 || in_channels != out_channels_) {
-    shortcut = register_module("shortcut", MakeConv(in_channels, out_channels_, 1, stride));
+    // Stride 1 on every stride-th pixel (forward): the values of a strided 1x1 convolution, whose oneDNN
+    // backward in LibTorch 1.13 corrupts the heap on channels-last input with fewer than 16 input channels
+    // (ResidualNet's first stage at width 0.25; training runs channels-last on the CPU, ToConvolutionLayout).
+    shortcut = register_module("shortcut", MakeConv(in_channels, out_channels_, 1, 1));
+    shortcut_stride_ = stride;
   }
   if (group_norm) {
     norm1 = register_module("norm1", MakeGroupNorm(conv1->options.out_channels()));
@@ -38,7 +42,13 @@ torch::Tensor ResidualUnitImpl::forward(const torch::Tensor& x) {
   } else {
     y = norm(norm2, conv2->forward(y));
   }
-  const torch::Tensor identity = shortcut ? norm(norm_shortcut, shortcut->forward(x)) : x;
+  torch::Tensor identity = x;
+  if (shortcut) {
+    const torch::Tensor sampled =
+        shortcut_stride_ == 1 ? x
+                              : x.slice(2, 0, c10::nullopt, shortcut_stride_).slice(3, 0, c10::nullopt, shortcut_stride_);
+    identity = norm(norm_shortcut, shortcut->forward(sampled));
+  }
   return act(y + identity);
 }
 

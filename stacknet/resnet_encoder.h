@@ -26,6 +26,7 @@ class ResidualUnitImpl : public torch::nn::Module {
   bool bottleneck_;
   int64_t out_channels_;
   torch::nn::Conv2d conv1{nullptr}, conv2{nullptr}, conv3{nullptr}, shortcut{nullptr};
+  int64_t shortcut_stride_ = 1;  // the projection reads every shortcut_stride_-th pixel (see the constructor)
   // Present only with group_norm: one per convolution above.
   torch::nn::GroupNorm norm1{nullptr}, norm2{nullptr}, norm3{nullptr}, norm_shortcut{nullptr};
 };

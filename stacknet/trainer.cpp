@@ -52,7 +52,7 @@ std::vector<torch::Tensor> PrepareStage(StackNet& model, const StageOptions& sta
 LossTerms TrainStep(StackNet& model, torch::optim::Adam& optimizer, const StageOptions& stage,
                     const LossOptions& loss, const StereoBatch& batch) {
   model->train();
-  const DisparityPyramid disparities = StageForward(model, stage, batch.left);
+  const DisparityPyramid disparities = StageForward(model, stage, ToConvolutionLayout(batch.left, batch.left.device()));
   LossTerms terms = TotalLoss(disparities, batch, loss, SwitchesOf(stage));
   optimizer.zero_grad();
   terms.total.backward();

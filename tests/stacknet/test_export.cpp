@@ -19,6 +19,7 @@
 #include "stacknet/checkpoint.h"
 #include "stacknet/config.h"
 #include "stacknet/dataset.h"
+#include "stacknet/device.h"
 #include "stacknet/export.h"
 #include "stacknet_test_util.h"
 #include "tests/dvso_cli_runner.h"
@@ -85,11 +86,11 @@ TEST(Export, InferenceLayoutGivesTheSameDisparities) {
     if (p.dim() == 4) channels_last += p.is_contiguous(at::MemoryFormat::ChannelsLast) && !p.is_contiguous();
   }
   EXPECT_GT(channels_last, 0u);  // the layout did change (1x1 kernels are both)
-  const torch::Tensor input = ToInferenceLayout(image, cpu);
+  const torch::Tensor input = ToConvolutionLayout(image, cpu);
   EXPECT_TRUE(input.is_contiguous(at::MemoryFormat::ChannelsLast));
   // An NHWC buffer viewed as NCHW (how the predictor wraps an image) is used as it is.
   const torch::Tensor nhwc_view = input.permute({0, 2, 3, 1}).contiguous().permute({0, 3, 1, 2});
-  EXPECT_EQ(ToInferenceLayout(nhwc_view, cpu).data_ptr(), nhwc_view.data_ptr());
+  EXPECT_EQ(ToConvolutionLayout(nhwc_view, cpu).data_ptr(), nhwc_view.data_ptr());
   const auto converted = module.forward({input}).toTuple();
   for (int i = 0; i < 2; ++i) {
     EXPECT_LT(MaxDifference(reference->elements()[i].toTensor(), converted->elements()[i].toTensor()), 1e-4);

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "core/error.h"
+#include "stacknet/device.h"
 #include "stacknet/layers.h"
 #include "stacknet/networks.h"
 #include "stacknet/resnet_encoder.h"
@@ -147,6 +148,61 @@ TEST(Networks, StageTwoTrainsResidualNetAndLeavesSimpleNetBitIdentical) {
   }
   EXPECT_EQ(changed, static_cast<int>(residual_after.size()));
   EXPECT_GT(net->residual_net()->named_parameters()["stem.weight"].grad().abs().sum().item<double>(), 0.0);
+}
+
+// The projection shortcut reads every 2nd pixel and convolves with stride 1 (a workaround for LibTorch 1.13's
+// strided 1x1 backward, resnet_encoder.cpp): the same values as the strided 1x1 convolution it replaces.
+TEST(Networks, ProjectionShortcutEqualsAStridedOneByOneConvolution) {
+  torch::manual_seed(4);
+  for (const int64_t size : {16, 17}) {  // odd sizes too: both give ceil(size / 2) rows and columns
+    ResidualUnit unit(8, 16, 2, /*bottleneck=*/false, Activation::kElu, 0.0, /*group_norm=*/false);
+    const torch::Tensor x = torch::randn({2, 8, size, size + 6});
+    auto p = unit->named_parameters();
+    const torch::Tensor main_path = torch::conv2d(
+        torch::elu(torch::conv2d(x, p["conv1.weight"], p["conv1.bias"], 2, 1)), p["conv2.weight"], p["conv2.bias"], 1, 1);
+    const torch::Tensor projection = torch::conv2d(x, p["shortcut.weight"], p["shortcut.bias"], /*stride=*/2);
+    const torch::Tensor expected = torch::elu(main_path + projection);
+    const torch::Tensor got = unit->forward(x);
+    ASSERT_EQ(got.sizes(), expected.sizes());
+    EXPECT_TRUE(torch::allclose(got, expected, 1e-5, 1e-6)) << "size " << size;
+  }
+}
+
+// Training feeds the network channels-last on the CPU (ToConvolutionLayout): the same loss and gradients as
+// NCHW, for both stages. Width 0.25 gives ResidualNet's first projection 8 input channels, the case where a
+// strided 1x1 convolution's backward corrupted the heap in this layout.
+TEST(Networks, ChannelsLastTrainingGivesTheGradientsOfNchw) {
+  NetworkOptions options = testing::TinyNetwork();
+  options.width_multiplier = 0.25;
+  options.input_height = 64;
+  options.input_width = 192;
+  const StereoBatch batch = testing::SyntheticBatch(2, 64, 192, 5, 11);
+  for (const char* model : {"simple", "stack"}) {
+    StageOptions stage;
+    stage.model = model;
+    std::vector<std::vector<torch::Tensor>> gradients;
+    std::vector<double> losses;
+    for (const bool channels_last : {false, true}) {
+      torch::manual_seed(5);
+      StackNet net(options);
+      const std::vector<torch::Tensor> trained = PrepareStage(net, stage);
+      const torch::Tensor input =
+          channels_last ? ToConvolutionLayout(batch.left, torch::Device(torch::kCPU)) : batch.left.contiguous();
+      ASSERT_EQ(input.is_contiguous(at::MemoryFormat::ChannelsLast), channels_last);
+      const LossTerms terms = TotalLoss(StageForward(net, stage, input), batch, LossOptions{}, SwitchesOf(stage));
+      terms.total.backward();
+      losses.push_back(terms.total.item<double>());
+      gradients.emplace_back();
+      for (const torch::Tensor& p : trained) gradients.back().push_back(p.grad().clone());
+    }
+    EXPECT_NEAR(losses[1], losses[0], 1e-5 * std::abs(losses[0])) << model;
+    ASSERT_EQ(gradients[0].size(), gradients[1].size());
+    for (size_t i = 0; i < gradients[0].size(); ++i) {
+      const double scale = gradients[0][i].abs().max().item<double>();
+      const double difference = (gradients[1][i] - gradients[0][i]).abs().max().item<double>();
+      EXPECT_LE(difference, 1e-3 * scale + 1e-9) << model << " parameter " << i;
+    }
+  }
 }
 
 TEST(Networks, GroupNormUsesTheLargestDivisorUpToEightGroups) {
