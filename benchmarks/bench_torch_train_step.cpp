@@ -8,12 +8,12 @@
 // Prints ms per step for each part and its share of the step, once with the input in NCHW and once in the
 // trainer's layout (ToConvolutionLayout: channels-last on the CPU), and the ratio of the two step times.
 // The first 2 steps of each are warm-up (not timed).
-#include <ATen/Parallel.h>
 #include <torch/torch.h>
 
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <stdexcept>
 #include <functional>
 #include <iostream>
 #include <map>
@@ -118,22 +118,35 @@ double TimeStage(StackNet& model, const StageOptions& stage, const LossOptions& 
 int main(int argc, char** argv) {
   std::string config_path = "configs/stacknet_cpu_v4_long.yaml";
   int steps = 12, threads = 1, batch_size = 4;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    const std::string flag = argv[i];
-    if (flag == "--config") config_path = argv[i + 1];
-    else if (flag == "--steps") steps = std::atoi(argv[i + 1]);
-    else if (flag == "--threads") threads = std::atoi(argv[i + 1]);
-    else if (flag == "--batch") batch_size = std::atoi(argv[i + 1]);
-    else {
-      std::cerr << "unknown flag " << flag << "\n";
-      return 2;
+  // Flags come in pairs; a missing value, an unknown flag or a non-integer is refused.
+  auto integer = [](const std::string& flag, const std::string& text) {
+    size_t used = 0;
+    int value = 0;
+    try {
+      value = std::stoi(text, &used);
+    } catch (const std::exception&) {
+      used = 0;
     }
-  }
-  if (steps < 1 || threads < 1 || batch_size < 1) {
-    std::cerr << "--steps, --threads and --batch must be positive\n";
+    if (used != text.size() || value < 1) throw std::invalid_argument(flag + " needs a positive integer, not '" + text + "'");
+    return value;
+  };
+  try {
+    for (int i = 1; i < argc; i += 2) {
+      const std::string flag = argv[i];
+      if (i + 1 >= argc) throw std::invalid_argument(flag + " needs a value");
+      const std::string value = argv[i + 1];
+      if (flag == "--config") config_path = value;
+      else if (flag == "--steps") steps = integer(flag, value);
+      else if (flag == "--threads") threads = integer(flag, value);
+      else if (flag == "--batch") batch_size = integer(flag, value);
+      else throw std::invalid_argument("unknown flag " + flag + " (--config, --steps, --threads, --batch)");
+    }
+  } catch (const std::invalid_argument& e) {
+    std::cerr << "bench_torch_train_step: " << e.what() << "\n";
     return 2;
   }
-  at::set_num_threads(threads);
+  // As `dvso train`: the thread budget reaches LibTorch and OpenBLAS alike.
+  dvso::stacknet::SelectDevice("cpu", threads);
   const auto config = dvso::stacknet::LoadConfig(config_path, /*check=*/false);  // the data need not exist here
   const int h = static_cast<int>(config.network.input_height), w = static_cast<int>(config.network.input_width);
   std::printf("%s: %dx%d, batch %d, %d intra-op thread(s)\n", config_path.c_str(), w, h, batch_size, threads);

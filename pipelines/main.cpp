@@ -9,7 +9,7 @@
 
 namespace {
 
-// Exit statuses: 0 success (and --help), then one per kind of failure.
+// Exit statuses: 0 success (and --help), then one per kind of failure (and 130 after Ctrl-C, as shells use).
 constexpr int kExitError = 1;       // dvso::Error: bad input or a failed run, one line naming the file
 constexpr int kExitUsage = 2;       // the command line itself (unknown option, missing or invalid flag value)
 constexpr int kExitUnexpected = 3;  // anything else (a bug): reported, never a crash

@@ -66,7 +66,6 @@ void UseInferenceLayout(torch::jit::Module& module, const torch::Device& device)
   }
 }
 
-
 LoadedModel LoadModel(const std::string& model_path, const torch::Device& device) {
   torch::jit::ExtraFilesMap extra{{kModelMetadataFile, ""}};
   LoadedModel loaded{LoadTorchScript(model_path, device, &extra), {}};
