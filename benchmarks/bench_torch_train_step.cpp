@@ -12,12 +12,11 @@
 
 #include <chrono>
 #include <cstdio>
-#include <cstdlib>
-#include <stdexcept>
-#include <functional>
 #include <iostream>
 #include <map>
+#include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "stacknet/config.h"
@@ -54,23 +53,21 @@ StereoBatch SyntheticBatch(int batch, int height, int width) {
   return b;
 }
 
-// Runs `steps` timed steps of one stage; each part's wall time goes into `ms` (per step).
+// Runs `steps` timed steps of one stage, prints each part's time per step and returns the step's.
 double TimeStage(StackNet& model, const StageOptions& stage, const LossOptions& loss, const StereoBatch& batch,
-               int steps) {
+                 int steps) {
   torch::optim::Adam optimizer(dvso::stacknet::PrepareStage(model, stage), torch::optim::AdamOptions(1e-4));
   model->train();
   const LossSwitches all = dvso::stacknet::SwitchesOf(stage);
   // Each term alone, to attribute the loss time (the sum of these is about the total loss's time).
+  const std::vector<std::pair<std::string, bool LossSwitches::*>> term_switches = {
+      {"unsupervised (eq. 2)", &LossSwitches::unsupervised}, {"supervised (eq. 3)", &LossSwitches::supervised},
+      {"left-right (eq. 4)", &LossSwitches::lr},             {"smoothness (eq. 5)", &LossSwitches::smooth},
+      {"occlusion (eq. 6)", &LossSwitches::occ}};
   std::vector<std::pair<std::string, LossSwitches>> terms;
-  for (const char* name : {"unsupervised (eq. 2)", "supervised (eq. 3)", "left-right (eq. 4)", "smoothness (eq. 5)",
-                           "occlusion (eq. 6)"}) {
+  for (const auto& [name, term] : term_switches) {
     LossSwitches only{false, false, false, false, false};
-    const std::string n = name;
-    if (n[0] == 'u') only.unsupervised = all.unsupervised;
-    if (n[0] == 's' && n[1] == 'u') only.supervised = all.supervised;
-    if (n[0] == 'l') only.lr = all.lr;
-    if (n[0] == 's' && n[1] == 'm') only.smooth = all.smooth;
-    if (n[0] == 'o') only.occ = all.occ;
+    only.*term = all.*term;
     terms.emplace_back(name, only);
   }
   std::map<std::string, double> ms;
