@@ -391,7 +391,8 @@ KittiRawDriveSummary WriteKittiRawDrive(const std::string& sequence_dir, const s
                                         const KittiRawDriveOptions& options, bool show_progress) {
   options.Check();
   const std::unique_ptr<SequenceReader> sequence = OpenKittiSequence(sequence_dir);
-  RequireFile(sequence->is_stereo(), sequence_dir, "a raw drive needs the stereo pair image_0/ image_1/");
+  RequireFile(sequence->is_stereo(), sequence_dir,
+              "a raw drive needs the stereo pair image_0/ image_1/: " + sequence->NotStereoReason());
   const std::string depth_dir = JoinPath(sequence_dir, "depth_0");
   RequireFile(fs::is_directory(depth_dir), depth_dir, "no simulated depth (write the sequence with `dvso simulate`)");
   const Trajectory poses = ReadTrajectory(JoinPath(sequence_dir, "poses.txt"), TrajectoryFormat::kKitti);

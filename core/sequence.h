@@ -49,6 +49,8 @@ class SequenceReader {
   virtual ~SequenceReader() = default;
   virtual int size() const = 0;
   virtual bool is_stereo() const = 0;
+  // Why is_stereo() is false, for the error of a command that needs a pair ("" when stereo).
+  virtual std::string NotStereoReason() const { return is_stereo() ? "" : "no right camera"; }
   virtual bool has_color() const = 0;
   // The KITTI camera pair the frames come from: the one asked for, or colour 02/03 where a folder has no
   // grey cameras (outputs record it; labels / maps of another pair are refused). Grey for other layouts.

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <iostream>
+#include <sstream>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -53,6 +55,8 @@ std::vector<std::string> ListImages(const std::string& directory) {
   for (const auto& entry : fs::directory_iterator(directory)) {
     // A writer killed between writing and renaming leaves 000123.tmp-writing.png (core/fs_util.h): never a frame.
     if (!entry.is_regular_file() || IsUnfinishedAtomicWrite(entry.path())) continue;
+    // Hidden files are never frames: macOS writes ._000000.png beside 000000.png on foreign disks.
+    if (entry.path().filename().string().front() == '.') continue;
     std::string ext = entry.path().extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
     if (ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".pgm" || ext == ".bmp") {
@@ -143,8 +147,10 @@ std::string FirstMissingNumberedFrame(const std::vector<std::string>& files, siz
     numbers.push_back(std::stoll(stem));
   }
   std::sort(numbers.begin(), numbers.end());
-  const long long end = std::max(numbers.back() + 1, static_cast<long long>(count));
-  long long expected = 0;
+  // A clip cut out of a longer recording, with a times.txt of its own length: frame i is its i-th image.
+  const long long start = count > 0 && count == numbers.size() ? numbers.front() : 0;
+  const long long end = std::max(numbers.back() + 1, start + static_cast<long long>(count));
+  long long expected = start;
   for (const long long n : numbers) {
     if (n != expected) break;
     ++expected;
@@ -160,7 +166,9 @@ cv::Size FirstDecodableImageSize(const std::vector<std::string>& files) {
   const size_t probes = std::min(files.size(), static_cast<size_t>(kSizeProbeFrames));
   for (size_t i = 0; i < probes; ++i) {
     const cv::Mat image = cv::imread(files[i], cv::IMREAD_UNCHANGED);
-    if (!image.empty()) return image.size();
+    if (image.empty()) continue;
+    RequireFullRangeIfSixteenBit(image, files[i]);
+    return image.size();
   }
   throw Error(files[0], "cannot decode image (nor any of the " + std::to_string(probes) + " first frames)");
 }
@@ -172,6 +180,37 @@ void RequireImagesOfCalibratedSize(const std::vector<std::string>& files, cv::Si
               "gives images of " + std::to_string(calibrated.width) + "x" + std::to_string(calibrated.height) +
                   ", but " + std::filesystem::path(files[0]).parent_path().string() + " holds " +
                   std::to_string(size.width) + "x" + std::to_string(size.height) + " images");
+}
+
+double RectifiedBaseline(const std::vector<double>& p_left, const std::vector<double>& p_right) {
+  Require(p_left.size() == 12 && p_right.size() == 12, "a projection matrix has 12 numbers");
+  const auto camera_x = [](const std::vector<double>& p) { return (p[3] - p[2] * p[11]) / p[0]; };
+  return camera_x(p_left) - camera_x(p_right);
+}
+
+void CheckPrincipalPointFitsImages(double cx, double cy, int width, int height, const std::string& calibration) {
+  const std::string images = std::to_string(width) + "x" + std::to_string(height) + " images";
+  std::ostringstream point;
+  point << "principal point (" << cx << ", " << cy << ")";
+  RequireFile(cx >= 0 && cx <= width && cy >= 0 && cy <= height, calibration,
+              point.str() + " lies outside the " + images +
+                  ": a calibration for another image size? (scale fx, fy, cx, cy and P[0][3] with the images)");
+  const double off_centre = std::max(std::abs(cx / width - 0.5), std::abs(cy / height - 0.5));
+  if (off_centre > kPrincipalPointWarnOffset) {
+    std::cerr << "dvso: warning: " << calibration << ": " << point.str() << " lies far from the centre of the "
+              << images << ": is the calibration for another image size? (its intrinsics must be scaled with the "
+              << "images)" << std::endl;
+  }
+}
+
+void RequireFullRangeIfSixteenBit(const cv::Mat& image, const std::string& file) {
+  if (image.depth() != CV_16U) return;
+  double max_value = 0;
+  cv::minMaxLoc(image.reshape(1), nullptr, &max_value);
+  RequireFile(max_value >= kMinSixteenBitMaximum, file,
+              "16-bit image whose values stop at " + std::to_string(static_cast<int>(max_value)) +
+                  " of 65535 (a 12-bit sensor's, or 8-bit values): read as full-range 16 bit it would be nearly "
+                  "black; scale the images to 8 bit or to the full 16-bit range");
 }
 
 bool SameRectifiedCamera(const std::vector<double>& p, const std::vector<double>& q) {

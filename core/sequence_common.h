@@ -13,7 +13,7 @@ namespace dvso::internal {
 cv::Mat LoadGreyImage(const std::string& path, cv::Size expected = {});
 // Loads an image as CV_8UC3 (BGR); same checks.
 cv::Mat LoadColorImage(const std::string& path, cv::Size expected = {});
-// Image files (png, jpg, jpeg, pgm, bmp; any case) of a directory in natural order: digit runs compare
+// Image files (png, jpg, jpeg, pgm, bmp; any case; hidden ones left out) of a directory in natural order: digit runs compare
 // as numbers, so 1.png 2.png 10.png stay in that order (zero-padded KITTI names sort as before), and
 // digits after a decimal point as a fraction (timestamps as names: 100.25 before 100.3).
 std::vector<std::string> ListImages(const std::string& directory);
@@ -21,7 +21,9 @@ std::vector<std::string> ListImages(const std::string& directory);
 // one width with one extension: the path the first missing number would have, counting from 0 (a
 // missing first frame too) up to the highest number, or to `count` - 1 when `count` (times.txt's length)
 // is larger; "" when nothing is missing or the list is not one numbering. A missing image would shift
-// every later frame onto another timestamp and pose.
+// every later frame onto another timestamp and pose. When there are exactly `count` files, the count
+// starts at the first file's number instead: a clip that kept its frame numbers (001000..001029) with
+// its own 30 times.
 std::string FirstMissingNumberedFrame(const std::vector<std::string>& files, size_t count = 0);
 // Natural order of two file names (ListImages).
 bool NaturalLess(const std::string& a, const std::string& b);
@@ -34,6 +36,23 @@ cv::Size FirstDecodableImageSize(const std::vector<std::string>& files);
 // would otherwise make every frame unreadable, one warning at a time.
 void RequireImagesOfCalibratedSize(const std::vector<std::string>& files, cv::Size calibrated,
                                    const std::string& calibration);
+// The baseline (metres) of a rectified pair from its two 3x4 projection matrices (row-major, 12 numbers,
+// KITTI's P = K [I | t] in rectified camera 0): b = t_left.x - t_right.x, with t.x = (P[0][3] - cx P[2][3]) / fx
+// since P[:, 3] = K t = (fx t.x + cx t.z, fy t.y + cy t.z, t.z). KITTI's colour cameras have t.z of a few mm;
+// leaving it out would make their baseline (and every metric scale from it) ~0.2 % short.
+double RectifiedBaseline(const std::vector<double>& p_left, const std::vector<double>& p_right);
+// Throws dvso::Error naming `calibration` when the principal point of `camera` lies outside its images (a
+// calibration made for another image size: a full-size KITTI calib.txt beside downscaled images), and warns
+// on stderr when it lies off the centre by more than kPrincipalPointWarnOffset of the size, which a
+// calibration for images twice the size gives: intrinsics scaled with the images are the user's job,
+// and a wrong camera otherwise runs to a garbage trajectory without any error.
+inline constexpr double kPrincipalPointWarnOffset = 0.25;
+void CheckPrincipalPointFitsImages(double cx, double cy, int width, int height, const std::string& calibration);
+// Throws dvso::Error naming `file` when `image` is 16-bit but its values stay below 2^12 (a 12-bit sensor's
+// or an 8-bit image's values in a 16-bit PNG): read as the full 16-bit range, as the readers do, it would be
+// nearly black and every frame lost without a word.
+inline constexpr int kMinSixteenBitMaximum = 1 << 12;
+void RequireFullRangeIfSixteenBit(const cv::Mat& image, const std::string& file);
 // Whether two rectified 3x4 projection matrices (row-major, 12 numbers, KITTI's P = K [I | t]) describe the
 // same camera: equal intrinsics and centre. On KITTI the colour cameras sit ~6 cm beside the grey ones
 // (P2[0][3] != P0[0][3]), so their images are another viewpoint; our simulator renders colour at the grey centres.

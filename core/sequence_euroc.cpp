@@ -218,6 +218,7 @@ class ImageFolderSequence : public SequenceReader {
   }
   int size() const override { return static_cast<int>(files_.size()); }
   bool is_stereo() const override { return false; }
+  std::string NotStereoReason() const override { return "an image folder is one camera"; }
   bool has_color() const override { return false; }
   const StereoCamera& camera() const override { return camera_; }
   const std::vector<double>& timestamps() const override { return timestamps_; }

@@ -21,18 +21,25 @@ namespace fs = std::filesystem;
 namespace {
 
 // Every "NAME: numbers" line of a calib.txt read from `in` (`calib_path` names it in errors); P0..P3
-// must have 12 numbers.
+// must have 12 numbers. Blank lines and '#' comments are skipped, a UTF-8 byte order mark and blanks
+// around the name are ignored (files written by other tools).
 std::map<std::string, std::vector<double>> ParseCalibrationRows(std::istream& in, const std::string& calib_path) {
   std::map<std::string, std::vector<double>> rows;
   std::string line;
   int line_number = 0;
+  constexpr const char* kBlanks = " \t\r";
+  constexpr const char* kUtf8ByteOrderMark = "\xEF\xBB\xBF";
   while (std::getline(in, line)) {
     ++line_number;
+    if (line_number == 1 && line.rfind(kUtf8ByteOrderMark, 0) == 0) line.erase(0, 3);
+    const auto first = line.find_first_not_of(kBlanks);
+    if (first == std::string::npos || line[first] == '#') continue;
     const auto colon = line.find(':');
-    if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
     RequireFile(colon != std::string::npos, calib_path,
                 "line " + std::to_string(line_number) + ": expected 'NAME: values'");
-    const std::string name = line.substr(0, colon);
+    std::string name = line.substr(0, colon);
+    name.erase(0, name.find_first_not_of(kBlanks));
+    name.erase(name.find_last_not_of(kBlanks) + 1);
     std::istringstream values(line.substr(colon + 1));
     std::vector<double> v;
     std::string token;
@@ -90,9 +97,7 @@ StereoCamera CameraFromCalibrationRows(std::map<std::string, std::vector<double>
   if (rows.count(right_key) == 1) {
     const auto& p_right = rows[right_key];
     RequireFile(p_right[0] > 0, calib_path, right_key + " has a non-positive focal length");
-    // P_X = K [I | t_X] in rectified camera 0 with t_right - t_left = -b e_x, so
-    // P_right[0][3] - P_left[0][3] = -fx * b.
-    camera.baseline = -(p_right[3] - p_left[3]) / p_right[0];
+    camera.baseline = internal::RectifiedBaseline(p_left, p_right);
     RequireFile(camera.baseline > 0, calib_path, right_key + " gives a non-positive stereo baseline");
   }
   try {
@@ -148,7 +153,19 @@ class KittiSequence : public SequenceReader {
     const cv::Size size = internal::FirstDecodableImageSize(files_);
     camera_ = ReadKittiCalibration(calib, size.width, size.height,
                                    colour_is_left ? CameraPair::kColour : CameraPair::kGrey);
-    stereo_ = camera_.baseline > 0 && fs::is_directory(right_dir_);
+    internal::CheckPrincipalPointFitsImages(camera_.left.cx, camera_.left.cy, size.width, size.height, calib);
+    const std::string right_folder = fs::path(right_dir_).filename().string() + "/";
+    const std::string first_right = JoinPath(right_dir_, fs::path(files_.front()).filename().string());
+    if (camera_.baseline <= 0) {
+      not_stereo_reason_ = calib + " has no " + (colour_is_left ? "P3" : "P1") + " line";
+    } else if (!fs::is_directory(right_dir_)) {
+      not_stereo_reason_ = "no " + right_folder + " folder";
+    } else if (!fs::exists(first_right)) {
+      // Checked once here: a right folder that holds none of the left names would otherwise fail every
+      // frame of a stereo run, one warning at a time.
+      not_stereo_reason_ = first_right + " is missing (the right images must carry the left ones' names)";
+    }
+    stereo_ = not_stereo_reason_.empty();
     // Colour beside the grey pair only when it was taken from the same centres (CameraPair), and only when
     // image_2/ holds images: an emptied folder (left by an earlier colour run, or by hand) is no colour
     // camera, and taking it for one fails on image_2/<first frame> in every colour reader.
@@ -176,6 +193,7 @@ class KittiSequence : public SequenceReader {
 
   int size() const override { return static_cast<int>(files_.size()); }
   bool is_stereo() const override { return stereo_; }
+  std::string NotStereoReason() const override { return not_stereo_reason_; }
   bool has_color() const override { return color_; }
   CameraPair camera_pair() const override { return pair_; }
   const StereoCamera& camera() const override { return camera_; }
@@ -206,6 +224,7 @@ class KittiSequence : public SequenceReader {
   std::vector<std::string> files_;
   StereoCamera camera_;
   bool stereo_ = false, color_ = false;
+  std::string not_stereo_reason_;  // NotStereoReason()
   CameraPair pair_ = CameraPair::kGrey;  // the pair read (colour where there are no grey images)
   std::vector<double> timestamps_;
 };

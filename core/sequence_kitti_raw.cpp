@@ -137,16 +137,14 @@ class KittiRawSequence : public SequenceReader {
     camera_.left.fy = p_left(1, 1);
     camera_.left.cx = p_left(0, 2);
     camera_.left.cy = p_left(1, 2);
-    if (extract_) {
-      const std::vector<double>& size =
-          CalibrationEntry(calibration.entries, "S_rect_0" + std::to_string(left_id), 2, cam_to_cam);
-      camera_.left.width = static_cast<int>(std::lround(size[0]));
-      camera_.left.height = static_cast<int>(std::lround(size[1]));
-    } else {
-      const cv::Size first = internal::FirstDecodableImageSize(left.files);
-      camera_.left.width = first.width;
-      camera_.left.height = first.height;
-    }
+    const std::vector<double>& size =
+        CalibrationEntry(calibration.entries, "S_rect_0" + std::to_string(left_id), 2, cam_to_cam);
+    camera_.left.width = static_cast<int>(std::lround(size[0]));
+    camera_.left.height = static_cast<int>(std::lround(size[1]));
+    // Sync drives hold the rectified images: of the size the calibration rectifies to, or it belongs to
+    // other images (a resized download) and would give a garbage trajectory without any error.
+    const cv::Size rectified(camera_.left.width, camera_.left.height);
+    if (!extract_) internal::RequireImagesOfCalibratedSize(left.files, rectified, cam_to_cam);
     try {
       camera_.left.Check();
     } catch (const Error& e) {
@@ -154,19 +152,17 @@ class KittiRawSequence : public SequenceReader {
     }
     stereo_ = fs::is_directory(Camera(right_id));
     RawCameraFiles right;
+    auto projection = [&](int id) -> const std::vector<double>& {
+      return CalibrationEntry(calibration.entries, "P_rect_0" + std::to_string(id), 12, cam_to_cam);
+    };
     if (stereo_) {
-      const Eigen::Matrix<double, 3, 4> p_right = calibration.Projection(right_id);
-      // P_rect_0X = K [I | t_X] in rectified camera 00: baseline = (t_left - t_right).x.
-      camera_.baseline = (p_left(0, 3) - p_right(0, 3)) / p_left(0, 0);
+      camera_.baseline = internal::RectifiedBaseline(projection(left_id), projection(right_id));
       RequireFile(camera_.baseline > 0, cam_to_cam, "P_rect gives a non-positive stereo baseline");
       right = LoadCamera(right_id, calibration);
     }
     // The colour pair beside the grey one (for the network), paired with the grey frames like the right camera,
     // only when it was taken from the grey cameras' centres (CameraPair; the simulator's drives): on KITTI
     // cameras 02/03 sit ~6 cm beside 00/01, another viewpoint than the grey pair's maps and labels.
-    auto projection = [&](int id) -> const std::vector<double>& {
-      return CalibrationEntry(calibration.entries, "P_rect_0" + std::to_string(id), 12, cam_to_cam);
-    };
     RawCameraFiles colour_left, colour_right;
     // The right colour camera counts only when a right image is read at all (stereo) and its folder is there.
     const bool colour_right_read = stereo_ && fs::is_directory(Camera(3));
@@ -215,6 +211,9 @@ class KittiRawSequence : public SequenceReader {
 
   int size() const override { return static_cast<int>(frames_.size()); }
   bool is_stereo() const override { return stereo_; }
+  std::string NotStereoReason() const override {
+    return stereo_ ? "" : "no " + Camera(colour_is_left_ ? 3 : 1) + " folder";
+  }
   bool has_color() const override { return color_; }
   CameraPair camera_pair() const override { return colour_is_left_ ? CameraPair::kColour : CameraPair::kGrey; }
   const StereoCamera& camera() const override { return camera_; }

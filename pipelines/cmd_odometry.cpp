@@ -72,11 +72,12 @@ void Run(const OdometryArgs& args) {
             << s.unreadable << "), initializing " << s.initializing << ", re-initialisations " << s.resets << "\n"
             << "mean " << s.mean_ms << " ms/frame (max " << s.max_ms << " ms), wall " << s.wall_ms
             << " ms/frame incl. reading\n";
-  if (s.frames > 0 && s.initializing + s.lost == s.frames) {
-    // Every line of the trajectory is an initialiser's guess or a lost frame: say so where a script looks.
+  if (s.frames > 1 && s.tracked <= 1) {
+    // Every line of the trajectory is an initialiser's guess, a lost frame or the first frame (a stereo
+    // run's origin): say so where a script looks.
     std::cerr << "dvso: warning: no frame was tracked (" << s.initializing << " initializing, " << s.lost
-              << " lost): the trajectory holds no estimate; mono needs the camera to translate (or use --mode "
-                 "stereo / dvso)\n";
+              << " lost of " << s.frames << "): the trajectory holds no estimate; check the images and the "
+              << "calibration (mono also needs the camera to translate, or use --mode stereo / dvso)\n";
   }
   if (predictions.worker != nullptr) {
     std::cout << "predictions (" << options.dvso.prediction_timing << "): " << predictions.worker->prefetched_used()

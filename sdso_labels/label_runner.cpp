@@ -192,7 +192,7 @@ LabelRunSummary RunLabelExtraction(const std::string& sequence_dir, const std::s
                                    const LabelRunOptions& options) {
   options.Check();
   const auto sequence = OpenSequence(sequence_dir, "", options.cameras);
-  Require(sequence->is_stereo(), sequence_dir + ": labels need a stereo sequence (image_1/ and a baseline in calib.txt)");
+  Require(sequence->is_stereo(), sequence_dir + ": labels need a stereo sequence: " + sequence->NotStereoReason());
   for (const std::string& dir : {options.gt_disparity_dir, options.gt_disparity_right_dir}) {
     if (!dir.empty()) RequireFile(fs::is_directory(dir), dir, "ground-truth disparity folder does not exist");
   }

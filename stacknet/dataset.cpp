@@ -170,7 +170,7 @@ int StereoDataset::AddSequence(const std::string& root) {
   seq.root = root;
   RequireFile(fs::is_directory(root), root, "sequence folder not found");
   seq.reader = OpenTrainingSequence(root);
-  RequireFile(seq.reader->is_stereo(), root, "training needs a stereo sequence");
+  RequireFile(seq.reader->is_stereo(), root, "training needs a stereo sequence: " + seq.reader->NotStereoReason());
   auto dir_if_exists = [&](const std::string& name) {
     if (name.empty()) return std::string();
     const std::string dir = fs::path(name).is_absolute() ? name : JoinPath(root, name);

@@ -13,6 +13,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "core/disparity_io.h"
+#include "core/fs_util.h"
 #include "tests/dvso_cli_runner.h"
 #include "tests/temp_dir.h"
 
@@ -121,6 +122,25 @@ TEST(Cli, MonoRunThatNeverInitialisesSaysSo) {
   EXPECT_EQ(r.exit_code, 0) << r.out;
   EXPECT_NE(r.out.find("warning: no frame was tracked (6 initializing"), std::string::npos) << r.out;
   EXPECT_TRUE(fs::exists(dir + "/o/trajectory.txt"));
+}
+
+// A stereo run whose every frame after the first is lost (images too small for its pyramid here) has only
+// the first frame's origin in its trajectory: the same warning, although no frame was "initializing".
+TEST(Cli, StereoRunThatLosesEveryFrameSaysSo) {
+  const std::string dir = TempDir("stereo_all_lost");
+  fs::create_directories(dir + "/image_0");
+  fs::create_directories(dir + "/image_1");
+  std::ofstream(dir + "/calib.txt") << "P0: 23 0 19.5 0 0 23 5.8 0 0 0 1 0\nP1: 23 0 19.5 -12.4 0 23 5.8 0 0 0 1 0\n";
+  for (int i = 0; i < 5; ++i) {
+    cv::Mat texture(12, 40, CV_8UC1);
+    cv::randu(texture, 0, 255);
+    cv::imwrite(dir + "/image_0/" + dvso::FrameFileName(i, ".png"), texture);
+    cv::imwrite(dir + "/image_1/" + dvso::FrameFileName(i, ".png"), texture);
+  }
+  const CliRun r = RunDvso("odometry --mode stereo --no-progress --sequence " + dir + " --out " + dir + "/o");
+  EXPECT_EQ(r.exit_code, 0) << r.out;
+  EXPECT_NE(r.out.find("lost 4"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("warning: no frame was tracked (0 initializing, 4 lost of 5)"), std::string::npos) << r.out;
 }
 
 TEST(Cli, RightGroundTruthWithoutRightLabelsIsAnError) {

@@ -402,6 +402,7 @@ TEST(SequenceRange, CountPastTheEndIsClampedAndSaidSo) {
 
 TEST(SequenceReader, KittiLayoutStreamsFrames) {
   const std::string root = MakeKittiSequence("kitti", 3, 37, 21);  // odd sizes on purpose
+  WriteText(root + "/image_0/._000001.png", "macOS metadata beside the frame on a foreign disk");
   auto seq = OpenSequence(root);
   ASSERT_EQ(seq->size(), 3);
   EXPECT_TRUE(seq->is_stereo());
@@ -462,6 +463,103 @@ TEST(SequenceReader, KittiCalibrationGivesEachPairItsOwnBaseline) {
   EXPECT_TRUE(KittiColourMatchesGrey(root + "/calib.txt"));
   WriteText(root + "/calib.txt", "P0: 700 0 30 0 0 700 20 0 0 0 1 0\nP1: 700 0 30 -378 0 700 20 0 0 0 1 0\n");
   EXPECT_THROW(ReadKittiCalibration(root + "/calib.txt", 60, 40, CameraPair::kColour), Error);
+}
+
+// KITTI odometry 00's colour cameras (calib.txt of 2011_10_03) sit a few mm apart along the optical axis:
+// P[2][3] = t.z != 0, so P[0][3] = fx t.x + cx t.z. By hand: t.x = (45.38225 - 607.1928 * 3.779761e-3) /
+// 718.856 = 0.0599386 and (-337.2877 - 607.1928 * 4.915215e-3) / 718.856 = -0.4733524, b = 0.5332909 m;
+// P[0][3] / fx alone gives 0.5323319 m, 0.18 % short (every metric scale from the colour pair with it).
+TEST(SequenceReader, ColourBaselineCountsTheCamerasDepthOffset) {
+  const std::string root = TempDir("calib_kitti00");
+  WriteText(root + "/calib.txt",
+            "P0: 7.188560000000e+02 0 6.071928000000e+02 0 0 7.188560000000e+02 1.852157000000e+02 0 0 0 1 0\n"
+            "P1: 7.188560000000e+02 0 6.071928000000e+02 -3.861448000000e+02 0 7.188560000000e+02 "
+            "1.852157000000e+02 0 0 0 1 0\n"
+            "P2: 7.188560000000e+02 0 6.071928000000e+02 4.538225000000e+01 0 7.188560000000e+02 "
+            "1.852157000000e+02 -1.130887000000e-01 0 0 1 3.779761000000e-03\n"
+            "P3: 7.188560000000e+02 0 6.071928000000e+02 -3.372877000000e+02 0 7.188560000000e+02 "
+            "1.852157000000e+02 2.369057000000e+00 0 0 1 4.915215000000e-03\n");
+  EXPECT_NEAR(ReadKittiCalibration(root + "/calib.txt", 1241, 376, CameraPair::kColour).baseline, 0.5332909, 1e-7);
+  EXPECT_NEAR(ReadKittiCalibration(root + "/calib.txt", 1241, 376).baseline, 386.1448 / 718.856, 1e-12);
+  // t.x of the left camera 0, of the right one (-3 - 10 * 0.5) / 2 = -4.
+  EXPECT_NEAR(internal::RectifiedBaseline({1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0}, {2, 0, 10, -3, 0, 2, 0, 0, 0, 0, 1, 0.5}),
+              4.0, 1e-12);
+}
+
+// Calibration files from other tools: a byte order mark, blanks around a name, '#' comments.
+TEST(SequenceReader, KittiCalibrationOfOtherWritersReads) {
+  const std::string root = TempDir("calib_other_writers");
+  WriteText(root + "/calib.txt",
+            "\xEF\xBB\xBF# written by another renderer\n"
+            "P0 : 700 0 30 0 0 700 20 0 0 0 1 0\r\n"
+            "  # the right camera\n"
+            "\tP1:\t700 0 30 -378 0 700 20 0 0 0 1 0\n");
+  const StereoCamera camera = ReadKittiCalibration(root + "/calib.txt", 60, 40);
+  EXPECT_NEAR(camera.left.fx, 700, 1e-12);
+  EXPECT_NEAR(camera.baseline, 0.54, 1e-12);
+}
+
+// A calibration written for other images than the ones beside it (a full-size KITTI calib.txt beside
+// downscaled images) runs to a garbage trajectory without any error unless the reader says so: a principal
+// point outside the images is an error, one far off their centre (calibration for twice the size) a warning.
+TEST(SequenceReader, CalibrationOfAnotherImageSizeIsAnErrorOrAWarning) {
+  const std::string root = MakeKittiSequence("calib_other_size", 2, 60, 40);
+  WriteText(root + "/calib.txt", kCalibColourBeside);  // centred: cx 30 of 60, cy 20 of 40
+  ::testing::internal::CaptureStderr();
+  EXPECT_NO_THROW(OpenSequence(root));
+  EXPECT_EQ(::testing::internal::GetCapturedStderr(), "");
+  WriteText(root + "/calib.txt", "P0: 700 0 58 0 0 700 38 0 0 0 1 0\nP1: 700 0 58 -378 0 700 38 0 0 0 1 0\n");
+  ::testing::internal::CaptureStderr();
+  EXPECT_NO_THROW(OpenSequence(root));
+  EXPECT_NE(::testing::internal::GetCapturedStderr().find("far from the centre of the 60x40 images"), std::string::npos);
+  WriteText(root + "/calib.txt", "P0: 700 0 120 0 0 700 20 0 0 0 1 0\nP1: 700 0 120 -378 0 700 20 0 0 0 1 0\n");
+  try {
+    OpenSequence(root);
+    FAIL() << "a principal point outside the images must be an error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("calib.txt: principal point (120, 20) lies outside the 60x40 images"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+// 16-bit images are read as the full 16-bit range; a 12-bit sensor's values (or 8-bit ones) in a 16-bit PNG
+// would read nearly black and lose every frame without a word, so the sequence refuses them when it opens.
+TEST(SequenceReader, SixteenBitImagesMustUseTheirRange) {
+  const std::string root = MakeKittiSequence("sixteen_bit", 2, 60, 40);
+  cv::Mat full;
+  RandomImage(60, 40, 0).convertTo(full, CV_16U, 256.0);
+  cv::imwrite(root + "/image_0/000000.png", full);
+  EXPECT_EQ(cv::norm(OpenSequence(root)->Read(0).left, RandomImage(60, 40, 0), cv::NORM_INF), 0.0);
+  cv::Mat twelve_bit(40, 60, CV_16U, cv::Scalar(1000));
+  twelve_bit.at<uint16_t>(3, 3) = 4095;
+  cv::imwrite(root + "/image_0/000000.png", twelve_bit);
+  try {
+    OpenSequence(root);
+    FAIL() << "a 16-bit image of 12-bit values must be refused";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("000000.png: 16-bit image whose values stop at 4095"), std::string::npos)
+        << e.what();
+  }
+}
+
+// A right folder that holds none of the left names (other names, another format, emptied) is no right
+// camera: said when the sequence opens, by the commands that need a pair, not once per frame of the run.
+TEST(SequenceReader, RightFolderWithoutTheLeftNamesIsNoPair) {
+  const std::string root = MakeKittiSequence("right_other_names", 2, 16, 8);
+  ASSERT_TRUE(OpenSequence(root)->is_stereo());
+  EXPECT_EQ(OpenSequence(root)->NotStereoReason(), "");
+  for (int i = 0; i < 2; ++i) {
+    fs::rename(root + "/image_1/" + FrameFileName(i, ".png"), root + "/image_1/" + FrameFileName(i, ".png", 10));
+  }
+  const auto renamed = OpenSequence(root);
+  EXPECT_FALSE(renamed->is_stereo());
+  EXPECT_NE(renamed->NotStereoReason().find("image_1/000000.png is missing"), std::string::npos)
+      << renamed->NotStereoReason();
+  fs::remove_all(root + "/image_1");
+  EXPECT_NE(OpenSequence(root)->NotStereoReason().find("no image_1/ folder"), std::string::npos);
+  WriteText(root + "/calib.txt", "P0: 100 0 8 0 0 100 4 0 0 0 1 0\n");
+  EXPECT_NE(OpenSequence(root)->NotStereoReason().find("has no P1 line"), std::string::npos);
 }
 
 TEST(SequenceReader, ColourPairMatchesGreyIsOneRuleForBothLayouts) {
@@ -609,6 +707,10 @@ TEST(SequenceReader, ImageFolderRunsInNumericOrderAndChecksTheCameraSize) {
   EXPECT_EQ(FirstMissingNumberedFrame({"d/a.png", "d/b.png"}), "");
   EXPECT_EQ(FirstMissingNumberedFrame({"d/1.png", "d/10.png"}), "");  // widths differ: not one numbering
   EXPECT_EQ(FirstMissingNumberedFrame({"d/000000000000.png", "d/999999999999.png"}), "d/000000000001.png");
+  // A clip that kept its numbers, with a times.txt of its own length, counts from its first number.
+  EXPECT_EQ(FirstMissingNumberedFrame({"d/001000.png", "d/001001.png"}, 2), "");
+  EXPECT_EQ(FirstMissingNumberedFrame({"d/000001.png", "d/000002.png", "d/000004.png"}, 3), "d/000003.png");
+  EXPECT_EQ(FirstMissingNumberedFrame({"d/000001.png", "d/000002.png"}, 3), "d/000000.png");
   // Timestamps as names: the digits after a decimal point are a fraction, not a number (.25 < .3).
   EXPECT_TRUE(NaturalLess("100.25.png", "100.3.png"));
   EXPECT_FALSE(NaturalLess("100.3.png", "100.25.png"));

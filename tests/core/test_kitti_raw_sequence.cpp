@@ -14,6 +14,7 @@
 
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "core/depth_split.h"
 #include "core/disparity_io.h"
@@ -211,6 +212,33 @@ TEST_F(SyncDrive, FrameWithoutItsRightImageIsSkippedNotMispaired) {
   // timestamps.txt keeps its 40 lines: every remaining file keeps the time of its own line.
   EXPECT_NEAR(gappy->timestamps()[5] - gappy->timestamps()[4],
               odometry_layout->timestamps()[6] - odometry_layout->timestamps()[4], 1e-6);
+}
+
+// A sync drive's images are rectified to S_rect_0X: images of another size (a resized download beside the
+// original calibration) are an error naming the calibration, not a run to a garbage trajectory.
+TEST_F(SyncDrive, ImagesOfAnotherSizeThanTheCalibrationAreAnError) {
+  const fs::path copy = Dir() / "resized" / "2011_09_26_drive_0001_sync";
+  fs::create_directories(copy.parent_path());
+  fs::copy(Drive(), copy, fs::copy_options::recursive);
+  for (const char* file : {"calib_cam_to_cam.txt", "calib_velo_to_cam.txt", "calib_imu_to_velo.txt"}) {
+    fs::copy_file(Drive().parent_path() / file, copy.parent_path() / file);
+  }
+  const cv::Size calibrated = OpenSequence(copy.string())->Read(0).left.size();
+  for (const auto& entry : fs::directory_iterator(copy / "image_00" / "data")) {
+    cv::Mat image = cv::imread(entry.path().string(), cv::IMREAD_UNCHANGED), half;
+    cv::resize(image, half, calibrated / 2);
+    cv::imwrite(entry.path().string(), half);
+  }
+  try {
+    OpenSequence(copy.string());
+    FAIL() << "images of half the calibrated size must be an error";
+  } catch (const Error& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("calib_cam_to_cam.txt"), std::string::npos) << what;
+    EXPECT_NE(what.find(std::to_string(calibrated.width / 2) + "x" + std::to_string(calibrated.height / 2) + " images"),
+              std::string::npos)
+        << what;
+  }
 }
 
 TEST_F(SyncDrive, GtDepthGivesBackTheSimulatedDepthAtTheVelodynePixels) {

@@ -94,7 +94,8 @@ SequenceRunSummary RunOdometryOnSequence(const SequenceReader& sequence, const O
   options.Check();
   const ModeCapabilities capabilities = CapabilitiesOf(mode);
   if (capabilities.has_right_image) {
-    Require(sequence.is_stereo(), sequence.root() + ": stereo mode needs a stereo sequence");
+    Require(sequence.is_stereo(),
+            sequence.root() + ": this mode needs a stereo sequence: " + sequence.NotStereoReason());
   }
   Require(run.first < sequence.size(), "--first " + std::to_string(run.first) + " is beyond the sequence (" +
                                            std::to_string(sequence.size()) + " frames)");
@@ -178,6 +179,7 @@ SequenceRunSummary RunOdometryOnSequence(const SequenceReader& sequence, const O
   summary.keyframes = system.num_keyframes_total();
   summary.lost = recorder.CountStatus(FrameStatus::kLost) + recorder.CountStatus(FrameStatus::kUnreadable);
   summary.initializing = recorder.CountStatus(FrameStatus::kInitializing);
+  summary.tracked = recorder.CountStatus(FrameStatus::kTracked) + recorder.CountStatus(FrameStatus::kKeyframe);
   summary.resets = system.num_resets();
   summary.mean_ms = summary.frames > 0 ? total_ms / summary.frames : 0;
   summary.ply_points = ply ? ply->num_points() : 0;

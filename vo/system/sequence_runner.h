@@ -34,6 +34,7 @@ struct SequenceRunOptions {
 struct SequenceRunSummary {
   int frames = 0;
   int keyframes = 0;
+  int tracked = 0;            // frames tracked or made keyframes (a stereo run's first frame too)
   int lost = 0;               // frames reported lost
   int initializing = 0;       // frames before (re-)initialisation finished
   int resets = 0;             // re-initialisations after a loss
