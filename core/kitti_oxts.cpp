@@ -73,10 +73,11 @@ OxtsPacket PoseToOxts(const Eigen::Isometry3d& T, double scale) {
 
 Eigen::Isometry3d CameraFromImu(const std::string& calib_dir, int camera) {
   const RawCameraCalibration calibration(calib_dir);
-  // Rectified camera X sits at -P(0,3)/P(0,0) along x of rectified camera 00 (P_rect_0X = K [I | t]).
+  // P_rect_0X = K [I | t]: rectified camera X = rectified camera 00 moved by t = K^-1 P[:, 3] (KITTI's colour
+  // cameras have t.y and t.z of a few mm besides t.x; the same t RectifiedBaseline reads).
   const Eigen::Matrix<double, 3, 4> P = calibration.Projection(camera);
   Eigen::Isometry3d shift = Eigen::Isometry3d::Identity();
-  shift.translation().x() = P(0, 3) / P(0, 0);
+  shift.translation() = P.leftCols<3>().inverse() * P.col(3);
   const Eigen::Isometry3d velo_from_imu = ReadRigidCalibration(JoinPath(calib_dir, "calib_imu_to_velo.txt"));
   return shift * calibration.RectifiedFromVelodyne() * velo_from_imu;
 }

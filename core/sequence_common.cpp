@@ -167,7 +167,7 @@ cv::Size FirstDecodableImageSize(const std::vector<std::string>& files) {
   for (size_t i = 0; i < probes; ++i) {
     const cv::Mat image = cv::imread(files[i], cv::IMREAD_UNCHANGED);
     if (image.empty()) continue;
-    RequireFullRangeIfSixteenBit(image, files[i]);
+    if (image.depth() == CV_16U) RequireSixteenBitRange(files, i, probes);
     return image.size();
   }
   throw Error(files[0], "cannot decode image (nor any of the " + std::to_string(probes) + " first frames)");
@@ -203,14 +203,24 @@ void CheckPrincipalPointFitsImages(double cx, double cy, int width, int height, 
   }
 }
 
-void RequireFullRangeIfSixteenBit(const cv::Mat& image, const std::string& file) {
-  if (image.depth() != CV_16U) return;
+void RequireSixteenBitRange(const std::vector<std::string>& files, size_t first, size_t end) {
   double max_value = 0;
-  cv::minMaxLoc(image.reshape(1), nullptr, &max_value);
-  RequireFile(max_value >= kMinSixteenBitMaximum, file,
+  for (size_t i = first; i < end && max_value < kMinSixteenBitMaximum; ++i) {
+    const cv::Mat image = cv::imread(files[i], cv::IMREAD_UNCHANGED);
+    if (image.empty() || image.depth() != CV_16U) continue;
+    std::vector<cv::Mat> channels;
+    cv::split(image, channels);
+    if (channels.size() == 4) channels.pop_back();  // alpha says nothing about the sensor's range
+    for (const cv::Mat& channel : channels) {
+      double channel_max = 0;
+      cv::minMaxLoc(channel, nullptr, &channel_max);
+      max_value = std::max(max_value, channel_max);
+    }
+  }
+  RequireFile(max_value >= kMinSixteenBitMaximum, files[first],
               "16-bit image whose values stop at " + std::to_string(static_cast<int>(max_value)) +
-                  " of 65535 (a 12-bit sensor's, or 8-bit values): read as full-range 16 bit it would be nearly "
-                  "black; scale the images to 8 bit or to the full 16-bit range");
+                  " of 65535 (a 12-bit sensor's, or 8-bit values; so do the next frames): read as full-range 16 bit "
+                  "it would be nearly black; scale the images to 8 bit or to the full 16-bit range");
 }
 
 bool SameRectifiedCamera(const std::vector<double>& p, const std::vector<double>& q) {

@@ -48,11 +48,12 @@ double RectifiedBaseline(const std::vector<double>& p_left, const std::vector<do
 // and a wrong camera otherwise runs to a garbage trajectory without any error.
 inline constexpr double kPrincipalPointWarnOffset = 0.25;
 void CheckPrincipalPointFitsImages(double cx, double cy, int width, int height, const std::string& calibration);
-// Throws dvso::Error naming `file` when `image` is 16-bit but its values stay below 2^12 (a 12-bit sensor's
-// or an 8-bit image's values in a 16-bit PNG): read as the full 16-bit range, as the readers do, it would be
-// nearly black and every frame lost without a word.
+// Throws dvso::Error naming files[first] when the 16-bit images files[first, end) (the probe frames) all stay
+// below 2^12 in every colour channel (a 12-bit sensor's or an 8-bit image's values in a 16-bit PNG): read as
+// the full 16-bit range, as the readers do, they would be nearly black and every frame lost without a word.
+// One dark frame (a lens cap, a tunnel) among full-range ones passes. FirstDecodableImageSize calls it.
 inline constexpr int kMinSixteenBitMaximum = 1 << 12;
-void RequireFullRangeIfSixteenBit(const cv::Mat& image, const std::string& file);
+void RequireSixteenBitRange(const std::vector<std::string>& files, size_t first, size_t end);
 // Whether two rectified 3x4 projection matrices (row-major, 12 numbers, KITTI's P = K [I | t]) describe the
 // same camera: equal intrinsics and centre. On KITTI the colour cameras sit ~6 cm beside the grey ones
 // (P2[0][3] != P0[0][3]), so their images are another viewpoint; our simulator renders colour at the grey centres.

@@ -1,4 +1,5 @@
 // KITTI odometry layout reader (also what `dvso simulate` writes).
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <map>
@@ -155,15 +156,22 @@ class KittiSequence : public SequenceReader {
                                    colour_is_left ? CameraPair::kColour : CameraPair::kGrey);
     internal::CheckPrincipalPointFitsImages(camera_.left.cx, camera_.left.cy, size.width, size.height, calib);
     const std::string right_folder = fs::path(right_dir_).filename().string() + "/";
-    const std::string first_right = JoinPath(right_dir_, fs::path(files_.front()).filename().string());
+    const auto right_of = [&](size_t i) { return JoinPath(right_dir_, fs::path(files_[i]).filename().string()); };
     if (camera_.baseline <= 0) {
       not_stereo_reason_ = calib + " has no " + (colour_is_left ? "P3" : "P1") + " line";
     } else if (!fs::is_directory(right_dir_)) {
       not_stereo_reason_ = "no " + right_folder + " folder";
-    } else if (!fs::exists(first_right)) {
-      // Checked once here: a right folder that holds none of the left names would otherwise fail every
-      // frame of a stereo run, one warning at a time.
-      not_stereo_reason_ = first_right + " is missing (the right images must carry the left ones' names)";
+    } else {
+      // A right folder that holds none of the first left names (other names, another format, emptied)
+      // would fail every frame of a stereo run, one warning at a time; a few missing right images are
+      // lost frames of the run, each said.
+      const size_t probes = std::min(files_.size(), static_cast<size_t>(internal::kSizeProbeFrames));
+      bool any_right = false;
+      for (size_t i = 0; i < probes && !any_right; ++i) any_right = fs::exists(right_of(i));
+      if (!any_right) {
+        not_stereo_reason_ = right_of(0) + " is missing, and so are the next " + std::to_string(probes - 1) +
+                             " (the right images must carry the left ones' names)";
+      }
     }
     stereo_ = not_stereo_reason_.empty();
     // Colour beside the grey pair only when it was taken from the same centres (CameraPair), and only when

@@ -72,9 +72,11 @@ void Run(const OdometryArgs& args) {
             << s.unreadable << "), initializing " << s.initializing << ", re-initialisations " << s.resets << "\n"
             << "mean " << s.mean_ms << " ms/frame (max " << s.max_ms << " ms), wall " << s.wall_ms
             << " ms/frame incl. reading\n";
-  if (s.frames > 1 && s.tracked <= 1) {
-    // Every line of the trajectory is an initialiser's guess, a lost frame or the first frame (a stereo
-    // run's origin): say so where a script looks.
+  // Modes that start metric make their first frame a keyframe at the origin: that one is no estimate.
+  const int estimates = vo::CapabilitiesOf(mode).StartsMetric() ? s.tracked - 1 : s.tracked;
+  if (s.frames > 0 && estimates <= 0) {
+    // Every line of the trajectory is an initialiser's guess, a lost frame or the origin: say so where a
+    // script looks.
     std::cerr << "dvso: warning: no frame was tracked (" << s.initializing << " initializing, " << s.lost
               << " lost of " << s.frames << "): the trajectory holds no estimate; check the images and the "
               << "calibration (mono also needs the camera to translate, or use --mode stereo / dvso)\n";

@@ -31,7 +31,9 @@ struct RawCalibration {
   Eigen::Matrix3d rect;                 // R_rect_00
   Eigen::Matrix<double, 3, 4> P_rect_02;
   double fx = 721.5377;
-  double camera2_offset_x = 44.85728 / 721.5377;  // P_rect_02(0,3) / fx
+  // t = K^-1 P_rect_02[:, 3] by hand: t.z = P(2,3), t.x = (P(0,3) - cx t.z) / fx, t.y = (P(1,3) - cy t.z) / fy.
+  Eigen::Vector3d camera2_offset{(44.85728 - 609.5593 * 0.002745884) / 721.5377,
+                                 (0.2163791 - 172.854 * 0.002745884) / 721.5377, 0.002745884};
 };
 
 // Writes calib_imu_to_velo.txt, calib_velo_to_cam.txt and calib_cam_to_cam.txt (1242x375 rectified).

@@ -534,13 +534,24 @@ TEST(SequenceReader, SixteenBitImagesMustUseTheirRange) {
   cv::Mat twelve_bit(40, 60, CV_16U, cv::Scalar(1000));
   twelve_bit.at<uint16_t>(3, 3) = 4095;
   cv::imwrite(root + "/image_0/000000.png", twelve_bit);
+  // A dark first frame among full-range ones (a lens cap, a tunnel) is no 12-bit sequence.
+  cv::imwrite(root + "/image_0/000001.png", full);
+  EXPECT_NO_THROW(OpenSequence(root));
+  cv::imwrite(root + "/image_0/000001.png", twelve_bit);
   try {
     OpenSequence(root);
-    FAIL() << "a 16-bit image of 12-bit values must be refused";
+    FAIL() << "16-bit images of 12-bit values must be refused";
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("000000.png: 16-bit image whose values stop at 4095"), std::string::npos)
         << e.what();
   }
+  // An opaque alpha channel (65535) says nothing about the colours' range.
+  cv::Mat rgba;
+  cv::cvtColor(twelve_bit, rgba, cv::COLOR_GRAY2BGRA);
+  rgba.forEach<cv::Vec4w>([](cv::Vec4w& pixel, const int*) { pixel[3] = 65535; });
+  cv::imwrite(root + "/image_0/000000.png", rgba);
+  cv::imwrite(root + "/image_0/000001.png", rgba);
+  EXPECT_THROW(OpenSequence(root), Error);
 }
 
 // A right folder that holds none of the left names (other names, another format, emptied) is no right
@@ -549,6 +560,10 @@ TEST(SequenceReader, RightFolderWithoutTheLeftNamesIsNoPair) {
   const std::string root = MakeKittiSequence("right_other_names", 2, 16, 8);
   ASSERT_TRUE(OpenSequence(root)->is_stereo());
   EXPECT_EQ(OpenSequence(root)->NotStereoReason(), "");
+  // One missing right image is a lost frame of the run, not a sequence without a pair.
+  fs::rename(root + "/image_1/000000.png", root + "/000000_right.png");
+  EXPECT_TRUE(OpenSequence(root)->is_stereo());
+  fs::rename(root + "/000000_right.png", root + "/image_1/000000.png");
   for (int i = 0; i < 2; ++i) {
     fs::rename(root + "/image_1/" + FrameFileName(i, ".png"), root + "/image_1/" + FrameFileName(i, ".png", 10));
   }

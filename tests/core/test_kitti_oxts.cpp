@@ -60,7 +60,7 @@ TEST(KittiOxts, PacketPoseRoundTrip) {
 // T_camrect2_imu of the calibration written by WriteRawCalibration, composed by hand.
 Eigen::Isometry3d CameraTwoFromImu(const testing::RawCalibration& c) {
   Eigen::Isometry3d shift = Eigen::Isometry3d::Identity();
-  shift.translation().x() = c.camera2_offset_x;
+  shift.translation() = c.camera2_offset;
   return shift * testing::Rigid(c.rect, Eigen::Vector3d::Zero()) * c.cam0_from_velo * c.velo_from_imu;
 }
 
