@@ -110,6 +110,19 @@ class SyncDrive : public ::testing::Test {
   fs::path Dir() const { return *dir_; }
   fs::path Seq() const { return Dir() / "seq"; }
   fs::path Drive() const { return Seq() / kSyncDrive; }
+  // A copy of the drive in a date folder `name` of its own, with the date's calibration files (but for
+  // calib_cam_to_cam.txt when a test writes its own): tests change the copy, never the shared drive.
+  fs::path CopyOfDrive(const std::string& name, bool with_cam_to_cam = true) const {
+    const fs::path copy = Dir() / name / "2011_09_26_drive_0001_sync";
+    fs::create_directories(copy.parent_path());
+    fs::copy(Drive(), copy, fs::copy_options::recursive);
+    for (const char* file : {"calib_cam_to_cam.txt", "calib_velo_to_cam.txt", "calib_imu_to_velo.txt"}) {
+      if (with_cam_to_cam || std::string(file) != "calib_cam_to_cam.txt") {
+        fs::copy_file(Drive().parent_path() / file, copy.parent_path() / file);
+      }
+    }
+    return copy;
+  }
   static std::string* dir_;
 };
 std::string* SyncDrive::dir_ = nullptr;
@@ -150,12 +163,7 @@ TEST_F(SyncDrive, ReadsLikeTheOdometryLayout) {
 TEST_F(SyncDrive, ColourCamerasBesideTheGreyOnesAreNotTheGreyPairsColour) {
   // KITTI's colour cameras sit ~6 cm beside the grey ones: their images are another viewpoint, so the grey
   // pair must not offer them as its colour (a map predicted on them is misplaced on the grey pixels).
-  const fs::path copy = Dir() / "colour_beside" / "2011_09_26_drive_0001_sync";
-  fs::create_directories(copy.parent_path());
-  fs::copy(Drive(), copy, fs::copy_options::recursive);
-  for (const char* file : {"calib_velo_to_cam.txt", "calib_imu_to_velo.txt"}) {
-    fs::copy_file(Drive().parent_path() / file, copy.parent_path() / file);
-  }
+  const fs::path copy = CopyOfDrive("colour_beside", /*with_cam_to_cam=*/false);
   std::ifstream in((Drive().parent_path() / "calib_cam_to_cam.txt").string());
   std::ofstream out((copy.parent_path() / "calib_cam_to_cam.txt").string());
   std::string line;
@@ -197,12 +205,7 @@ TEST_F(SyncDrive, ColourCamerasBesideTheGreyOnesAreNotTheGreyPairsColour) {
 }
 
 TEST_F(SyncDrive, FrameWithoutItsRightImageIsSkippedNotMispaired) {
-  const fs::path copy = Dir() / "gappy" / "2011_09_26_drive_0001_sync";
-  fs::create_directories(copy.parent_path());
-  fs::copy(Drive(), copy, fs::copy_options::recursive);
-  for (const char* file : {"calib_cam_to_cam.txt", "calib_velo_to_cam.txt", "calib_imu_to_velo.txt"}) {
-    fs::copy_file(Drive().parent_path() / file, copy.parent_path() / file);
-  }
+  const fs::path copy = CopyOfDrive("gappy");
   fs::remove(copy / "image_01" / "data" / "0000000005.png");
   const std::unique_ptr<SequenceReader> gappy = OpenSequence(copy.string());
   const std::unique_ptr<SequenceReader> odometry_layout = OpenSequence(Seq().string());
@@ -217,12 +220,7 @@ TEST_F(SyncDrive, FrameWithoutItsRightImageIsSkippedNotMispaired) {
 // A sync drive's images are rectified to S_rect_0X: images of another size (a resized download beside the
 // original calibration) are an error naming the calibration, not a run to a garbage trajectory.
 TEST_F(SyncDrive, ImagesOfAnotherSizeThanTheCalibrationAreAnError) {
-  const fs::path copy = Dir() / "resized" / "2011_09_26_drive_0001_sync";
-  fs::create_directories(copy.parent_path());
-  fs::copy(Drive(), copy, fs::copy_options::recursive);
-  for (const char* file : {"calib_cam_to_cam.txt", "calib_velo_to_cam.txt", "calib_imu_to_velo.txt"}) {
-    fs::copy_file(Drive().parent_path() / file, copy.parent_path() / file);
-  }
+  const fs::path copy = CopyOfDrive("resized");
   const cv::Size calibrated = OpenSequence(copy.string())->Read(0).left.size();
   for (const auto& entry : fs::directory_iterator(copy / "image_00" / "data")) {
     cv::Mat image = cv::imread(entry.path().string(), cv::IMREAD_UNCHANGED), half;
