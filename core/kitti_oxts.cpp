@@ -8,10 +8,12 @@
 #include <iomanip>
 #include <optional>
 #include <sstream>
+#include <vector>
 
 #include "core/error.h"
 #include "core/fs_util.h"
 #include "core/kitti_raw_calibration.h"
+#include "core/sequence_common.h"
 
 namespace dvso {
 
@@ -73,11 +75,15 @@ OxtsPacket PoseToOxts(const Eigen::Isometry3d& T, double scale) {
 
 Eigen::Isometry3d CameraFromImu(const std::string& calib_dir, int camera) {
   const RawCameraCalibration calibration(calib_dir);
-  // P_rect_0X = K [I | t]: rectified camera X = rectified camera 00 moved by t = K^-1 P[:, 3] (KITTI's colour
-  // cameras have t.y and t.z of a few mm besides t.x; the same t RectifiedBaseline reads).
+  // P_rect_0X = K [I | t]: rectified camera X = rectified camera 00 moved by t (internal::RectifiedCameraOffset).
   const Eigen::Matrix<double, 3, 4> P = calibration.Projection(camera);
+  std::vector<double> projection;
+  for (int row = 0; row < 3; ++row) {
+    for (int col = 0; col < 4; ++col) projection.push_back(P(row, col));
+  }
+  const cv::Vec3d offset = internal::RectifiedCameraOffset(projection);
   Eigen::Isometry3d shift = Eigen::Isometry3d::Identity();
-  shift.translation() = P.leftCols<3>().inverse() * P.col(3);
+  shift.translation() = Eigen::Vector3d(offset[0], offset[1], offset[2]);
   const Eigen::Isometry3d velo_from_imu = ReadRigidCalibration(JoinPath(calib_dir, "calib_imu_to_velo.txt"));
   return shift * calibration.RectifiedFromVelodyne() * velo_from_imu;
 }

@@ -182,10 +182,16 @@ void RequireImagesOfCalibratedSize(const std::vector<std::string>& files, cv::Si
                   std::to_string(size.width) + "x" + std::to_string(size.height) + " images");
 }
 
+cv::Vec3d RectifiedCameraOffset(const std::vector<double>& projection) {
+  Require(projection.size() == 12, "a projection matrix has 12 numbers");
+  const std::vector<double>& p = projection;
+  const cv::Matx33d K(p[0], p[1], p[2], p[4], p[5], p[6], p[8], p[9], p[10]);
+  Require(cv::determinant(K) != 0.0, "a projection matrix's left 3x3 block (K) must be invertible");
+  return K.solve(cv::Vec3d(p[3], p[7], p[11]), cv::DECOMP_LU);
+}
+
 double RectifiedBaseline(const std::vector<double>& p_left, const std::vector<double>& p_right) {
-  Require(p_left.size() == 12 && p_right.size() == 12, "a projection matrix has 12 numbers");
-  const auto camera_x = [](const std::vector<double>& p) { return (p[3] - p[2] * p[11]) / p[0]; };
-  return camera_x(p_left) - camera_x(p_right);
+  return RectifiedCameraOffset(p_left)[0] - RectifiedCameraOffset(p_right)[0];
 }
 
 void CheckPrincipalPointFitsImages(double cx, double cy, int width, int height, const std::string& calibration) {
