@@ -411,17 +411,34 @@ TEST(Export, InitFromRejectsAnExportWhoseNonParameterOptionsDiffer) {
   fs::remove_all(dir);
 }
 
-// Exports written before the options were recorded carry none of them and load as before, whatever
-// the target's options (nothing to compare with): the shipped model is one.
+// Exports written before the options were recorded (the shipped model of sessions 13-32, for one) carry none of
+// them and load as before, whatever the target's options (nothing to compare with). Such a file, as
+// TraceStackNet wrote it then: the weights (dots as underscores), the input size and uses_residual, no options.
 TEST(Export, ExportsWithoutRecordedOptionsLoadAsBefore) {
-  const std::string root = std::string(DVSO_TEST_DATA_DIR) + "/..";
-  const std::string model_path = root + "/models/stacknet_cpu_main.pt";
-  ASSERT_FALSE(torch::jit::load(model_path).hasattr("standardize_residual_inputs"));
-  const ModelMetadata metadata = ReadModelMetadata(model_path);
-  NetworkOptions network = LoadConfig(root + "/configs/" + metadata.config_name + ".yaml", false).network;
-  network.standardize_residual_inputs = !network.standardize_residual_inputs;
-  StackNet target(network);
-  EXPECT_EQ(LoadWeightsFromExport(model_path, target), static_cast<int>(target->parameters().size()));
+  const NetworkOptions options = testing::TinyNetwork();
+  torch::manual_seed(37);
+  StackNet source(options);
+  torch::jit::Module old_export("DvsoStackNet");
+  for (const auto& item : source->named_parameters()) {
+    std::string name = item.key();
+    std::replace(name.begin(), name.end(), '.', '_');
+    old_export.register_parameter(name, item.value(), /*is_buffer=*/false);
+  }
+  old_export.register_attribute("input_height", c10::IntType::get(), c10::IValue(int64_t{32}));
+  old_export.register_attribute("input_width", c10::IntType::get(), c10::IValue(int64_t{64}));
+  old_export.register_attribute("uses_residual", c10::BoolType::get(), c10::IValue(true));
+  const std::string path = dvso::testing::ScratchPath("export_without_options.pt");
+  old_export.save(path);
+  ASSERT_FALSE(torch::jit::load(path).hasattr("standardize_residual_inputs"));
+
+  NetworkOptions other = options;
+  other.standardize_residual_inputs = !other.standardize_residual_inputs;
+  other.residual_leaky_slope = options.residual_leaky_slope + 0.1;
+  StackNet target(other);
+  EXPECT_EQ(LoadWeightsFromExport(path, target), static_cast<int>(target->parameters().size()));
+  torch::NoGradGuard no_grad;
+  EXPECT_TRUE(torch::equal(target->parameters().front(), source->parameters().front()));
+  fs::remove(path);
 }
 
 TEST(Export, ShippedModelNamesTheConfigItWasTrainedWith) {
