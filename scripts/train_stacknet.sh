@@ -30,6 +30,8 @@
 #   FINETUNE_CONFIG=configs/stacknet_cpu_v4_finetune_640.yaml  second training from the base run's export
 #                                        (default for the shipped config; "" = none: the base run is final)
 #   TB_VALUES=0.40:0.04:0.64             b_v grid of the tb step (metres)
+#   TB_FINE_STEP=0.01                    then a grid of this step around the coarse best, 3 steps each side
+#                                        ("" = coarse grid only; before session 33 there was none)
 #   DOCS=docs                            where metrics and figures go (default: docs/ for the shipped
 #                                        model's config, $RUN/docs for any other)
 #   SNIPPETS=/work/shared/data/kitti_odometry_snippets  real KITTI frames (no depth GT) for a figure
@@ -57,6 +59,7 @@ fi
 FINAL_RUN=$RUN
 [[ -n "$FINETUNE_CONFIG" ]] && FINAL_RUN=$RUN/finetune
 TB_VALUES=${TB_VALUES:-0.40:0.04:0.64}
+TB_FINE_STEP=${TB_FINE_STEP-0.01}
 # Figures and metrics go into docs/ only for the shipped model's config; other runs keep theirs in $RUN/docs.
 DOCS=${DOCS:-$([[ $CONFIG == "$SHIPPED_CONFIG" ]] && echo docs || echo "$RUN/docs")}
 NICE=${NICE:-19}
@@ -303,9 +306,20 @@ step_tb() {
     pairs+=(--sequence "$DATA/$1" --gt "$DATA/$1/poses.txt")
   done
   log "tune-baseline $TB_VALUES on ${#TB_WORLDS[@]} worlds"
-  rm -rf "$FINAL_RUN/tb"
+  rm -rf "$FINAL_RUN/tb" "$FINAL_RUN/tb_fine"
   run "$DVSO" tune-baseline --model "$FINAL_RUN/stacknet.pt" "${pairs[@]}" --values "$TB_VALUES" --out "$FINAL_RUN/tb" \
     --write-model "$FINAL_RUN/stacknet_tb.pt.tmp" --json > "$FINAL_RUN/tune_baseline.json"
+  if [[ -n "$TB_FINE_STEP" ]]; then
+    # The coarse grid's step (0.04 m, ~8 % of b_v) is coarser than the scale errors that matter (t_rel <= 2 %):
+    # a second grid of TB_FINE_STEP around the coarse best, three steps to each side.
+    local best fine
+    best=$(sed -n 's/.*"best_virtual_baseline": *\([0-9.eE+-]*\).*/\1/p' "$FINAL_RUN/tune_baseline.json")
+    [[ -n "$best" ]] || { echo "error: no best_virtual_baseline in $FINAL_RUN/tune_baseline.json" >&2; exit 1; }
+    fine=$(awk -v b="$best" -v s="$TB_FINE_STEP" 'BEGIN { printf "%.3f:%.3f:%.3f", b - 3 * s, s, b + 3 * s }')
+    log "tune-baseline $fine (around the coarse best $best)"
+    run "$DVSO" tune-baseline --model "$FINAL_RUN/stacknet.pt" "${pairs[@]}" --values "$fine" --out "$FINAL_RUN/tb_fine" \
+      --write-model "$FINAL_RUN/stacknet_tb.pt.tmp" --json > "$FINAL_RUN/tune_baseline_fine.json"
+  fi
   mv "$FINAL_RUN/stacknet_tb.pt.tmp" "$FINAL_RUN/stacknet_tb.pt"
   log "tuned model: $FINAL_RUN/stacknet_tb.pt (ship: cp it to models/stacknet_cpu_main.pt)"
 }
