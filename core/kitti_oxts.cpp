@@ -81,7 +81,7 @@ Eigen::Isometry3d CameraFromImu(const std::string& calib_dir, int camera) {
   for (int row = 0; row < 3; ++row) {
     for (int col = 0; col < 4; ++col) projection.push_back(P(row, col));
   }
-  const cv::Vec3d offset = internal::RectifiedCameraOffset(projection);
+  const cv::Vec3d offset = internal::RectifiedCameraOffset(projection, calibration.path);
   Eigen::Isometry3d shift = Eigen::Isometry3d::Identity();
   shift.translation() = Eigen::Vector3d(offset[0], offset[1], offset[2]);
   const Eigen::Isometry3d velo_from_imu = ReadRigidCalibration(JoinPath(calib_dir, "calib_imu_to_velo.txt"));

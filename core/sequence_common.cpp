@@ -182,16 +182,17 @@ void RequireImagesOfCalibratedSize(const std::vector<std::string>& files, cv::Si
                   std::to_string(size.width) + "x" + std::to_string(size.height) + " images");
 }
 
-cv::Vec3d RectifiedCameraOffset(const std::vector<double>& projection) {
-  Require(projection.size() == 12, "a projection matrix has 12 numbers");
+cv::Vec3d RectifiedCameraOffset(const std::vector<double>& projection, const std::string& calibration) {
+  RequireFile(projection.size() == 12, calibration, "a projection matrix has 12 numbers");
   const std::vector<double>& p = projection;
   const cv::Matx33d K(p[0], p[1], p[2], p[4], p[5], p[6], p[8], p[9], p[10]);
-  Require(cv::determinant(K) != 0.0, "a projection matrix's left 3x3 block (K) must be invertible");
+  RequireFile(cv::determinant(K) != 0.0, calibration, "a projection matrix's left 3x3 block (K) is singular");
   return K.solve(cv::Vec3d(p[3], p[7], p[11]), cv::DECOMP_LU);
 }
 
-double RectifiedBaseline(const std::vector<double>& p_left, const std::vector<double>& p_right) {
-  return RectifiedCameraOffset(p_left)[0] - RectifiedCameraOffset(p_right)[0];
+double RectifiedBaseline(const std::vector<double>& p_left, const std::vector<double>& p_right,
+                         const std::string& calibration) {
+  return RectifiedCameraOffset(p_left, calibration)[0] - RectifiedCameraOffset(p_right, calibration)[0];
 }
 
 void CheckPrincipalPointFitsImages(double cx, double cy, int width, int height, const std::string& calibration) {

@@ -39,12 +39,14 @@ void RequireImagesOfCalibratedSize(const std::vector<std::string>& files, cv::Si
 // Where the camera of a rectified 3x4 projection matrix (row-major, 12 numbers, KITTI's P = K [I | t] in
 // rectified camera 0) sits: t = K^-1 P[:, 3] (metres), so t.z = P[2][3] and t.x = (P[0][3] - cx t.z) / fx for
 // KITTI's K. KITTI's colour cameras have t.y and t.z of a few mm besides t.x. The one reading of a camera's
-// offset: RectifiedBaseline and CameraFromImu (kitti_oxts.h) both use it. Throws dvso::Error on a singular K.
-cv::Vec3d RectifiedCameraOffset(const std::vector<double>& projection);
+// offset: RectifiedBaseline and CameraFromImu (kitti_oxts.h) both use it. Throws dvso::Error naming
+// `calibration` (the file the matrix came from) on a singular K.
+cv::Vec3d RectifiedCameraOffset(const std::vector<double>& projection, const std::string& calibration);
 // The baseline (metres) of a rectified pair from its two projection matrices: b = t_left.x - t_right.x
 // (RectifiedCameraOffset). Leaving out t.z, as P[0][3] / fx does, would make KITTI's colour baseline (and every
 // metric scale from it) ~0.2 % short.
-double RectifiedBaseline(const std::vector<double>& p_left, const std::vector<double>& p_right);
+double RectifiedBaseline(const std::vector<double>& p_left, const std::vector<double>& p_right,
+                         const std::string& calibration);
 // Throws dvso::Error naming `calibration` when the principal point of `camera` lies outside its images (a
 // calibration made for another image size: a full-size KITTI calib.txt beside downscaled images), and warns
 // on stderr when it lies off the centre by more than kPrincipalPointWarnOffset of the size, which a

@@ -98,7 +98,7 @@ StereoCamera CameraFromCalibrationRows(std::map<std::string, std::vector<double>
   if (rows.count(right_key) == 1) {
     const auto& p_right = rows[right_key];
     RequireFile(p_right[0] > 0, calib_path, right_key + " has a non-positive focal length");
-    camera.baseline = internal::RectifiedBaseline(p_left, p_right);
+    camera.baseline = internal::RectifiedBaseline(p_left, p_right, calib_path);
     RequireFile(camera.baseline > 0, calib_path, right_key + " gives a non-positive stereo baseline");
   }
   try {

@@ -156,7 +156,7 @@ class KittiRawSequence : public SequenceReader {
       return CalibrationEntry(calibration.entries, "P_rect_0" + std::to_string(id), 12, cam_to_cam);
     };
     if (stereo_) {
-      camera_.baseline = internal::RectifiedBaseline(projection(left_id), projection(right_id));
+      camera_.baseline = internal::RectifiedBaseline(projection(left_id), projection(right_id), cam_to_cam);
       RequireFile(camera_.baseline > 0, cam_to_cam, "P_rect gives a non-positive stereo baseline");
       right = LoadCamera(right_id, calibration);
     }

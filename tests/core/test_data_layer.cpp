@@ -482,14 +482,19 @@ TEST(SequenceReader, ColourBaselineCountsTheCamerasDepthOffset) {
   EXPECT_NEAR(ReadKittiCalibration(root + "/calib.txt", 1241, 376, CameraPair::kColour).baseline, 0.5332909, 1e-7);
   EXPECT_NEAR(ReadKittiCalibration(root + "/calib.txt", 1241, 376).baseline, 386.1448 / 718.856, 1e-12);
   // t.x of the left camera 0, of the right one (-3 - 10 * 0.5) / 2 = -4.
-  EXPECT_NEAR(internal::RectifiedBaseline({1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0}, {2, 0, 10, -3, 0, 2, 0, 0, 0, 0, 1, 0.5}),
+  EXPECT_NEAR(internal::RectifiedBaseline({1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0}, {2, 0, 10, -3, 0, 2, 0, 0, 0, 0, 1, 0.5}, "calib.txt"),
               4.0, 1e-12);
   // t = K^-1 P[:, 3] with every component: t.z = 0.5, t.y = (1 - 6 * 0.5) / 4 = -0.5, t.x = (-3 - 10 * 0.5) / 2 = -4.
-  const cv::Vec3d offset = internal::RectifiedCameraOffset({2, 0, 10, -3, 0, 4, 6, 1, 0, 0, 1, 0.5});
+  const cv::Vec3d offset = internal::RectifiedCameraOffset({2, 0, 10, -3, 0, 4, 6, 1, 0, 0, 1, 0.5}, "calib.txt");
   EXPECT_NEAR(offset[0], -4.0, 1e-12);
   EXPECT_NEAR(offset[1], -0.5, 1e-12);
   EXPECT_NEAR(offset[2], 0.5, 1e-12);
-  EXPECT_THROW(internal::RectifiedCameraOffset({0, 0, 0, 1, 0, 1, 0, 0, 0, 0, 1, 0}), Error);
+  try {
+    internal::RectifiedCameraOffset({0, 0, 0, 1, 0, 1, 0, 0, 0, 0, 1, 0}, "calib.txt");
+    ADD_FAILURE() << "a singular K was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("calib.txt"), std::string::npos) << e.what();  // names the file
+  }
 }
 
 // Calibration files from other tools: a byte order mark, blanks around a name, '#' comments.
