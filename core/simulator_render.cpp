@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "core/luma.h"
 #include "core/vignette.h"
 
 namespace dvso::sim {
@@ -323,7 +324,7 @@ RenderedView Renderer::Render(const Eigen::Isometry3d& T_world_camera, const Pho
         const float vignette = static_cast<float>(lens.At(radial_position.Sq(x, y)));
         const float k = scale * vignette;
         const float bias = static_cast<float>(photometric.bias);
-        const float lum = 0.299f * radiance.x() + 0.587f * radiance.y() + 0.114f * radiance.z();
+        const float lum = Luma(radiance.x(), radiance.y(), radiance.z());
         const uint64_t pixel_key = photometric.noise_seed ^ (static_cast<uint64_t>(y) << 32 | static_cast<uint32_t>(x));
         float noise = 0.f;
         if (photometric.noise_sigma > 0)

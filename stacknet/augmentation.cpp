@@ -1,5 +1,7 @@
 #include "stacknet/augmentation.h"
 
+#include "core/luma.h"
+
 namespace dvso::stacknet {
 
 StereoSample FlipAndSwap(const StereoSample& s) {
@@ -12,6 +14,12 @@ StereoSample FlipAndSwap(const StereoSample& s) {
   out.left_mask = flip(s.right_mask);
   out.right_mask = flip(s.left_mask);
   return out;
+}
+
+torch::Tensor ToGrey(const torch::Tensor& rgb) {
+  const torch::Tensor weights =
+      torch::tensor({kLumaWeightRed, kLumaWeightGreen, kLumaWeightBlue}, rgb.options()).view({3, 1, 1});
+  return (rgb * weights).sum(0, /*keepdim=*/true).expand_as(rgb).contiguous();
 }
 
 StereoSample Augment(const StereoSample& sample, const AugmentOptions& options, std::mt19937_64& rng) {
@@ -27,6 +35,9 @@ StereoSample Augment(const StereoSample& sample, const AugmentOptions& options, 
   const float colors[3] = {static_cast<float>(uniform(options.color_min, options.color_max)),
                            static_cast<float>(uniform(options.color_min, options.color_max)),
                            static_cast<float>(uniform(options.color_min, options.color_max))};
+  // Drawn only when grey augmentation is on, so configs without it keep their random stream (and old runs
+  // stay reproducible).
+  const bool grey = options.grey_probability > 0 && unit(rng) < options.grey_probability;
   if (flip) out = FlipAndSwap(out);
   if (photometric) {
     const torch::Tensor color = torch::from_blob(const_cast<float*>(colors), {3, 1, 1}, torch::kFloat32).clone();
@@ -35,6 +46,10 @@ StereoSample Augment(const StereoSample& sample, const AugmentOptions& options, 
     };
     out.left = apply(out.left);
     out.right = apply(out.right);
+  }
+  if (grey) {
+    out.left = ToGrey(out.left);
+    out.right = ToGrey(out.right);
   }
   return out;
 }

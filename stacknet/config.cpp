@@ -110,6 +110,7 @@ void VisitAugment(Map& m, AugmentOptions& o) {
   m.Get("color_min", &o.color_min);
   m.Get("color_max", &o.color_max);
   m.Get("flip_probability", &o.flip_probability);
+  m.Get("grey_probability", &o.grey_probability);
 }
 template <typename Map>
 void VisitTrain(Map& m, TrainOptions& o) {

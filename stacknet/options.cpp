@@ -49,6 +49,7 @@ void AugmentOptions::Check() const {
   range(color_min, color_max, "color");
   Require(probability >= 0 && probability <= 1, "augment.probability must be in [0, 1]");
   Require(flip_probability >= 0 && flip_probability <= 1, "augment.flip_probability must be in [0, 1]");
+  Require(grey_probability >= 0 && grey_probability <= 1, "augment.grey_probability must be in [0, 1]");
 }
 
 void StageOptions::Check() const {

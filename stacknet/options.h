@@ -73,6 +73,8 @@ struct AugmentOptions {
   double color_min = 0.8;            // per-channel colour factor range
   double color_max = 1.2;
   double flip_probability = 0.5;     // horizontal flip with left/right swap
+  double grey_probability = 0.0;     // chance that both views become grey (BT.601 luma in all 3 channels), as
+                                     // DVSO feeds a grey camera (KITTI image_0); 0 = off, not in the paper
   void Check() const;
 };
 
