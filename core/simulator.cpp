@@ -42,6 +42,7 @@ void SimulatorOptions::Check() const {
   Require(scene.tree_density >= 0 && scene.tree_density <= 5, "tree density must be in [0, 5]");
   Require(exposure_level > 0.05 && exposure_level < 4, "exposure level must be in (0.05, 4)");
   Require(height_jitter >= 0 && height_jitter < 0.5, "height jitter must be in [0, 0.5) m");
+  Require(car_detail <= 1, "car detail must be a share in [0, 1] (or < 0: the appearance's own)");
 }
 
 StreetSimulator::StreetSimulator(const SimulatorOptions& options) : options_(options) {
@@ -54,6 +55,7 @@ StreetSimulator::StreetSimulator(const SimulatorOptions& options) : options_(opt
     options_.camera_height += kVariedCameraHeightRange * (2 * unit(look_rng) - 1);
     options_.height_jitter = std::max(options_.height_jitter, kVariedHeightJitter);
   }
+  if (options_.car_detail >= 0) options_.scene.appearance.car_detail = static_cast<float>(options_.car_detail);
   // Trajectory: from file or generated.
   if (!options_.trajectory_path.empty()) {
     const Trajectory trajectory = ReadTrajectory(options_.trajectory_path, TrajectoryFormat::kKitti);

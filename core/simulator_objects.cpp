@@ -175,7 +175,12 @@ void AddCar(Placement& pl, const Vec3& base, const Vec3& forward, double length,
   const Vec3 f = forward * (length / 2 + 0.4), r = shadow.frame_right * 1.3, lift = up * 0.015;
   pl.builder->AddQuad(base - f - r + lift, base + f - r + lift, base + f + r + lift, base - f + r + lift, up,
                       pl.builder->AddSurface(shadow));
-  Surface paint = Textured(kTexCarPaint, colour, 0.3f, 0.15f);
+  // Detailed paint for a share of the cars, decided by the car's position, not by pl.rng, so that every
+  // later placement draw stays what it was before the option existed.
+  std::mt19937_64 paint_draw(static_cast<uint64_t>(std::llround(base.x() * 1000)) * 73856093ull ^
+                             static_cast<uint64_t>(std::llround(base.z() * 1000)) * 19349663ull);
+  const bool detailed = std::uniform_real_distribution<double>(0.0, 1.0)(paint_draw) < pl.options.appearance.car_detail;
+  Surface paint = Textured(detailed ? kTexCarPaintDetailed : kTexCarPaint, colour, 0.3f, 0.15f);
   Surface glass = Textured(kTexCarGlass, {0.85f, 0.9f, 1.0f}, 0.2f, 0.2f);
   Surface rubber = Textured(kTexRubber, {1.f, 1.f, 1.f}, 0.f, 0.f);
   const double width = pl.U(1.7, 1.85);

@@ -93,6 +93,7 @@ struct Appearance {
   int facade_styles = kNumFacadeStyles;  // styles drawn from: 4 = the original, 6 adds siding and glass
   float facade_free_colour = 0.f;     // probability that a building's colour is any hue (else the palette)
   bool car_shapes = false;            // sedans, hatchbacks, estates, SUVs and vans instead of one sedan shape
+  float car_detail = 0.f;             // probability that a car's paint shows reflections, dirt and handles
   bool varied = false;                // drawn by RandomAppearance (recorded in simulation.yaml)
 };
 

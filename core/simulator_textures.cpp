@@ -24,6 +24,8 @@ uint32_t Hash3(uint32_t x, uint32_t y, uint32_t z) {
 float HashUnit(int x, int y, uint32_t salt) {
   return (Hash3(static_cast<uint32_t>(x), static_cast<uint32_t>(y), salt) >> 8) * (1.0f / 16777216.0f);
 }
+// Amplitude of the reflections on the detailed car paint (albedo units; the plain paint's variation is 0.05).
+constexpr float kCarReflectionContrast = 0.3f;
 float Smooth(float t) { return t * t * t * (t * (t * 6 - 15) + 10); }
 int Wrap(int i, int period) { return ((i % period) + period) % period; }
 
@@ -267,6 +269,31 @@ Image CarPaint(int n, uint32_t s) {
   return c.Done();
 }
 
+// Car paint as bodies look from a few metres (Appearance::car_detail): the surroundings' reflections as
+// blotches from ~30 cm down to ~2 cm, grain, road dirt spots and door handles, on the plain paint's panel lines.
+// With only the plain paint a van's side is nearly uniform, so within 5 m neither the Stereo DSO labels nor the
+// photometric loss had anything to match on (docs/stacknet.md, sessions 9 and 36).
+Image CarPaintDetailed(int n, uint32_t s) {
+  Canvas c(n);  // tile 2 m, as CarPaint
+  c.ForEach([&](float x, float y, float& p) {
+    // Sharp-edged reflections of dark objects (trees, buildings) over soft sky blotches.
+    const float sharp = std::clamp((Fbm(x, y, 4, 6, 0.65f, s + 3) - 0.06f) * 20.f, 0.f, 1.f);
+    p = 0.80f + 0.5f * kCarReflectionContrast * Fbm(x, y, 6, 5, 0.6f, s) - kCarReflectionContrast * sharp +
+        0.06f * (HashUnit(int(x * n / 2), int(y * n / 2), s + 1) - 0.5f);
+    if (std::min(std::fmod(x * 2.f, 1.f), 1 - std::fmod(x * 2.f, 1.f)) * n / 2 < 1.5f) p *= 0.5f;
+  });
+  std::mt19937_64 rng(s + 2);  // own generator: the bank's other textures stay as they were
+  std::uniform_real_distribution<float> u(0.f, 1.f);
+  for (int i = 0; i < n * n / 800; ++i) {  // dirt and chips: dark and light spots of 1-4 texels
+    const float r = 1.f + 3.f * u(rng);
+    c.Disc(u(rng) * n, u(rng) * n, r, r * (0.5f + 0.5f * u(rng)), u(rng) < 0.7f ? 0.3f : 0.95f, 0.6f);
+  }
+  for (int door = 0; door < 2; ++door)  // a handle behind each seam (seams every metre)
+    c.Disc((door * 0.5f + 0.06f) * n, 0.3f * n, 0.03f * n, 0.008f * n, 0.25f, 0.9f);
+  c.Blur3();
+  return c.Done();
+}
+
 Image Leaves(int n, std::mt19937_64& rng) {
   Canvas c(n, 0.22f);
   std::uniform_real_distribution<float> u(0.f, 1.f);
@@ -401,6 +428,7 @@ TextureBank::TextureBank(uint64_t seed, int size) {
     set(FacadeTexture(style), Facade(size, style, rng, s + 600 + 50 * style));
   set(kTexRoadConcrete, RoadConcrete(size, rng, s + 1600));
   set(kTexGrassDry, GrassDry(size, rng, s + 1700));
+  set(kTexCarPaintDetailed, CarPaintDetailed(size, s + 1800));
 }
 
 }  // namespace dvso::sim

@@ -37,6 +37,7 @@ enum TextureId : int {
   kTexFacadeGlass,    // glass curtain wall: large panes between mullions
   kTexRoadConcrete,   // concrete road slabs with joints
   kTexGrassDry,       // sparse, patchy grass
+  kTexCarPaintDetailed,  // car paint with reflections, dirt and handles (Appearance::car_detail)
   kNumTextures
 };
 constexpr int kNumFacadeStyles = 4;  // kTexFacadePlaster .. kTexFacadeStone

@@ -84,6 +84,7 @@ void WriteSimulationYaml(const std::string& path, const StreetSimulator& simulat
         << ", road_tint: " << vec(a.road_tint) << ", grass_tint: " << vec(a.grass_tint)
         << ", leaves_tint: " << vec(a.leaves_tint) << ", facade_styles: " << a.facade_styles
         << ", facade_free_colour: " << a.facade_free_colour << ", car_shapes: " << (a.car_shapes ? "true" : "false")
+        << ", car_detail: " << a.car_detail
         << "}\n";
     out << "exposure_level: " << o.exposure_level << "\nheight_jitter: " << o.height_jitter << "\n";
     out << "world: {triangles: " << scene.triangles.size() << ", buildings: " << scene.num_buildings

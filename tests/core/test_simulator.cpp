@@ -12,6 +12,7 @@
 #include <functional>
 #include <memory>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <string>
 #include <vector>
 
@@ -327,6 +328,7 @@ TEST(Simulator, RejectsBadOptions) {
   expect_error([](SimulatorOptions& o) { o.scene.building_density = 1.5; });
   expect_error([](SimulatorOptions& o) { o.exposure_level = 0; });
   expect_error([](SimulatorOptions& o) { o.height_jitter = -0.01; });
+  expect_error([](SimulatorOptions& o) { o.car_detail = 1.5; });
   expect_error([](SimulatorOptions& o) { o.right_gain = 0.3; });
   expect_error([](SimulatorOptions& o) { o.right_bias = 50; });
   expect_error([](SimulatorOptions& o) {
@@ -489,6 +491,43 @@ TEST(Simulator, VariedAppearanceChangesTheLookPerSeed) {
   EXPECT_GT(varied.first, 20.0);
   EXPECT_GT(varied.first, 2.0 * fixed.first);
   EXPECT_GT(varied.second, 1.5 * fixed.second);
+}
+
+TEST(Simulator, CarDetailChangesOnlyTheCarsPaint) {
+  // --car-detail 1 against 0 on the same world: the geometry (depth) is identical, only pixels change, and those
+  // that change carry more texture with the detailed paint (cars are what it paints).
+  SimulatorOptions o = SmallOptions(620, 188);
+  o.first_frame = 300;  // parked cars on both sides, the nearest within ~5 m
+  o.num_frames = 1;
+  o.noise = false;
+  o.scene.car_density = 1.0;
+  o.car_detail = 0;
+  const SimulatedFrame plain = StreetSimulator(o).Render(0);
+  o.car_detail = 1;
+  const SimulatedFrame detailed = StreetSimulator(o).Render(0);
+  EXPECT_EQ(cv::countNonZero(plain.left.depth != detailed.left.depth), 0);
+  cv::Mat changed = cv::abs(plain.left.grey - detailed.left.grey) > 0;
+  // Away from the borders, where the horizontal neighbour exists.
+  changed.col(0).setTo(0);
+  changed.col(changed.cols - 1).setTo(0);
+  const int num_changed = cv::countNonZero(changed);
+  std::printf("car detail changed %d of %d pixels\n", num_changed, static_cast<int>(changed.total()));
+  ASSERT_GT(num_changed, static_cast<int>(changed.total() / 50)) << "no car in view: choose another frame";
+  auto mean_gradient = [&](const cv::Mat& grey) {
+    cv::Mat g;
+    cv::Sobel(grey, g, CV_32F, 1, 0);
+    return cv::mean(cv::abs(g), changed)[0];
+  };
+  const double g_plain = mean_gradient(plain.left.grey), g_detailed = mean_gradient(detailed.left.grey);
+  std::printf("mean |d/dx| on the changed pixels: plain %.2f detailed %.2f\n", g_plain, g_detailed);
+  EXPECT_GT(g_detailed, 1.5 * g_plain);
+  // The fixed look has none, the varied one draws a share in [0.3, 1].
+  EXPECT_EQ(sim::Appearance{}.car_detail, 0.f);
+  for (uint64_t seed = 1; seed <= 5; ++seed) {
+    const float share = sim::RandomAppearance(seed).car_detail;
+    EXPECT_GE(share, 0.3f);
+    EXPECT_LE(share, 1.f);
+  }
 }
 
 TEST(Simulator, VariedAppearanceKeepsTheGroundTruthExact) {
