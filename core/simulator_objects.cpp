@@ -157,6 +157,17 @@ constexpr int kNumCarShapes = sizeof(kCarShapes) / sizeof(kCarShapes[0]);
 // Upper bound of any car's height (van: 0.3 m lift + 1.25 m body + 0.6 m cabin).
 constexpr double kMaxCarHeight = 2.5;
 
+// Uniform [0, 1) draw that decides whether a car gets the detailed paint: from the car's ground position (mm,
+// spatial-hash primes) rather than from the placement generator, so every later placement draw stays what it was
+// before the option existed. The worlds of configs/stacknet_cpu_v4c_long.yaml were rendered with exactly this draw.
+double CarPaintDraw(const Vec3& base) {
+  constexpr double kMillimetres = 1000;
+  constexpr uint64_t kPrimeX = 73856093ull, kPrimeZ = 19349663ull;
+  std::mt19937_64 draw(static_cast<uint64_t>(std::llround(base.x() * kMillimetres)) * kPrimeX ^
+                       static_cast<uint64_t>(std::llround(base.z() * kMillimetres)) * kPrimeZ);
+  return std::uniform_real_distribution<double>(0.0, 1.0)(draw);
+}
+
 void AddCar(Placement& pl, const Vec3& base, const Vec3& forward, double length, int shape) {
   const Eigen::Vector3f colour = pl.Colour(kCarColours);
   const Vec3 up = pl.builder->up();
@@ -175,11 +186,7 @@ void AddCar(Placement& pl, const Vec3& base, const Vec3& forward, double length,
   const Vec3 f = forward * (length / 2 + 0.4), r = shadow.frame_right * 1.3, lift = up * 0.015;
   pl.builder->AddQuad(base - f - r + lift, base + f - r + lift, base + f + r + lift, base - f + r + lift, up,
                       pl.builder->AddSurface(shadow));
-  // Detailed paint for a share of the cars, decided by the car's position, not by pl.rng, so that every
-  // later placement draw stays what it was before the option existed.
-  std::mt19937_64 paint_draw(static_cast<uint64_t>(std::llround(base.x() * 1000)) * 73856093ull ^
-                             static_cast<uint64_t>(std::llround(base.z() * 1000)) * 19349663ull);
-  const bool detailed = std::uniform_real_distribution<double>(0.0, 1.0)(paint_draw) < pl.options.appearance.car_detail;
+  const bool detailed = CarPaintDraw(base) < pl.options.appearance.car_detail;
   Surface paint = Textured(detailed ? kTexCarPaintDetailed : kTexCarPaint, colour, 0.3f, 0.15f);
   Surface glass = Textured(kTexCarGlass, {0.85f, 0.9f, 1.0f}, 0.2f, 0.2f);
   Surface rubber = Textured(kTexRubber, {1.f, 1.f, 1.f}, 0.f, 0.f);

@@ -408,7 +408,7 @@ Appearance RandomAppearance(uint64_t seed) {
   a.facade_free_colour = U(0.2, 0.7);
   a.car_shapes = true;
   // Drawn last, so every draw above stays what it was before session 36.
-  a.car_detail = U(0.3, 1.0);
+  a.car_detail = U(kVariedCarDetailMin, 1.0);
   return a;
 }
 

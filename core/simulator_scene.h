@@ -97,6 +97,9 @@ struct Appearance {
   bool varied = false;                // drawn by RandomAppearance (recorded in simulation.yaml)
 };
 
+// The varied look's share of cars with detailed paint is drawn in [kVariedCarDetailMin, 1]: some plain cars stay.
+constexpr float kVariedCarDetailMin = 0.3f;
+
 // A varied look drawn from the seed: sun elevation 12-70 degrees, sunny to
 // overcast light, warm / cold light colour, sky colour and clouds, asphalt or
 // concrete road, material tints, six facade styles with free colours, car shapes.

@@ -24,8 +24,6 @@ uint32_t Hash3(uint32_t x, uint32_t y, uint32_t z) {
 float HashUnit(int x, int y, uint32_t salt) {
   return (Hash3(static_cast<uint32_t>(x), static_cast<uint32_t>(y), salt) >> 8) * (1.0f / 16777216.0f);
 }
-// Amplitude of the reflections on the detailed car paint (albedo units; the plain paint's variation is 0.05).
-constexpr float kCarReflectionContrast = 0.3f;
 float Smooth(float t) { return t * t * t * (t * (t * 6 - 15) + 10); }
 int Wrap(int i, int period) { return ((i % period) + period) % period; }
 
@@ -270,14 +268,18 @@ Image CarPaint(int n, uint32_t s) {
 }
 
 // Car paint as bodies look from a few metres (Appearance::car_detail): the surroundings' reflections as
-// blotches from ~30 cm down to ~2 cm, grain, road dirt spots and door handles, on the plain paint's panel lines.
-// With only the plain paint a van's side is nearly uniform, so within 5 m neither the Stereo DSO labels nor the
-// photometric loss had anything to match on (docs/stacknet.md, sessions 9 and 36).
+// sharp-edged dark patches (trees, buildings) over soft blotches from ~30 cm down to ~2 cm, grain, road dirt spots
+// and door handles, with the plain paint's vertical panel seams every metre. With only the plain paint a van's side
+// is nearly uniform, so within 5 m neither the Stereo DSO labels nor the photometric loss had anything to match on
+// (docs/stacknet.md, sessions 9 and 36).
+constexpr float kCarReflectionContrast = 0.3f;  // albedo; the plain paint varies by ~0.05
+constexpr float kCarReflectionCover = 0.06f;    // fBm level above which a reflected dark object starts (~35 % of the body)
+constexpr float kCarReflectionEdge = 20.f;      // ramp steepness: edges ~1/20 of the fBm range wide, i.e. sharp
 Image CarPaintDetailed(int n, uint32_t s) {
   Canvas c(n);  // tile 2 m, as CarPaint
   c.ForEach([&](float x, float y, float& p) {
-    // Sharp-edged reflections of dark objects (trees, buildings) over soft sky blotches.
-    const float sharp = std::clamp((Fbm(x, y, 4, 6, 0.65f, s + 3) - 0.06f) * 20.f, 0.f, 1.f);
+    const float sharp =
+        std::clamp((Fbm(x, y, 4, 6, 0.65f, s + 3) - kCarReflectionCover) * kCarReflectionEdge, 0.f, 1.f);
     p = 0.80f + 0.5f * kCarReflectionContrast * Fbm(x, y, 6, 5, 0.6f, s) - kCarReflectionContrast * sharp +
         0.06f * (HashUnit(int(x * n / 2), int(y * n / 2), s + 1) - 0.5f);
     if (std::min(std::fmod(x * 2.f, 1.f), 1 - std::fmod(x * 2.f, 1.f)) * n / 2 < 1.5f) p *= 0.5f;
