@@ -14,7 +14,8 @@
 #        OUT=work dir (default /tmp/dvso_camera_height; rendered worlds are reused),
 #        HEIGHTS="1.55 1.65 1.75" (m, before the varied look's own offset of up to +-0.1 m),
 #        FRAMES=30, WIDTH=640, HEIGHT=192 (the training images' size), MAX_DEPTH=80
-#   default worlds: the held-out trajectories of scripts/train_stacknet.sh (KITTI 08/09/10, their seeds)
+#   default worlds: the held-out trajectories of scripts/train_stacknet.sh (KITTI 08/09/10, their seeds; plain car
+#   paint, --car-detail 0, as its default WORLDS=v4 renders them)
 set -euo pipefail
 
 REPO=$(cd "$(dirname "$0")/.." && pwd)
@@ -47,7 +48,7 @@ for spec in "${WORLDS[@]}"; do
     if [[ ! -f "$world/done" ]]; then
       rm -rf "$world"
       "$DVSO" simulate --trajectory "$poses" --first "$first" --count "$FRAMES" --seed "$seed" --appearance varied \
-        --width "$WIDTH" --height "$HEIGHT" --color --camera-height "$h" --out "$world" --quiet > "$world.log" 2>&1 ||
+        --car-detail 0 --width "$WIDTH" --height "$HEIGHT" --color --camera-height "$h" --out "$world" --quiet > "$world.log" 2>&1 ||
         { echo "error: simulate failed, see $world.log" >&2; exit 1; }
       touch "$world/done"
     fi

@@ -22,8 +22,13 @@
 # Environment:
 #   DVSO=build/dvso                      binary (build with scripts/build.sh)
 #   WORLDS=v4                            training worlds: v4 = 72 of 30 frames, v3 = 36 of 60 frames,
+#                                        v4c = v4's worlds with detailed car paint (session 36),
 #                                        smoke = 3 of 12 frames (tests of the scripts only)
-#   CONFIG=configs/stacknet_cpu_v4_long.yaml  (the shipped model's base run; v3: configs/stacknet_cpu_main.yaml)
+#   CONFIG=configs/stacknet_cpu_v4_long.yaml  (the shipped model's base run; v3: configs/stacknet_cpu_main.yaml;
+#                                        v4c: configs/stacknet_cpu_v4c_long.yaml)
+#   CAR_DETAIL=0                         `dvso simulate --car-detail` of every world (training, held-out, tb): 0 = plain
+#                                        paint, the worlds of every model before session 36 (v3, v4, smoke); -1 = the
+#                                        varied look's own share (v4c's default)
 #                                        data paths must point into $DATA
 #   DATA=/tmp/dvso_stacknet_$WORLDS      rendered sequences and labels (~6 GB)
 #   RUN=$DATA/run_main                   checkpoints, logs, exported models, predictions
@@ -49,11 +54,22 @@ WORLDS=${WORLDS:-v4}
 # The shipped models/stacknet_cpu_main.pt (session 13) is this config's run (session 9) fine-tuned at 640x192 by
 # configs/stacknet_cpu_v4_finetune_640.yaml (the finetune step), with b_v from the tb step.
 SHIPPED_CONFIG=configs/stacknet_cpu_v4_long.yaml
-CONFIG=${CONFIG:-$([[ $WORLDS == v4 ]] && echo "$SHIPPED_CONFIG" || echo configs/stacknet_cpu_main.yaml)}
+V4C_CONFIG=configs/stacknet_cpu_v4c_long.yaml
+case $WORLDS in
+  v4) DEFAULT_CONFIG=$SHIPPED_CONFIG ;;
+  v4c) DEFAULT_CONFIG=$V4C_CONFIG ;;
+  *) DEFAULT_CONFIG=configs/stacknet_cpu_main.yaml ;;
+esac
+CONFIG=${CONFIG:-$DEFAULT_CONFIG}
+CAR_DETAIL=${CAR_DETAIL:-$([[ $WORLDS == v4c ]] && echo -1 || echo 0)}
 DATA=${DATA:-/tmp/dvso_stacknet_$WORLDS}
 RUN=${RUN:-$DATA/run_main}
 if [[ -z "${FINETUNE_CONFIG+set}" ]]; then
-  FINETUNE_CONFIG=$([[ $CONFIG == "$SHIPPED_CONFIG" ]] && echo configs/stacknet_cpu_v4_finetune_640.yaml || echo "")
+  case $CONFIG in
+    "$SHIPPED_CONFIG") FINETUNE_CONFIG=configs/stacknet_cpu_v4_finetune_640.yaml ;;
+    "$V4C_CONFIG") FINETUNE_CONFIG=configs/stacknet_cpu_v4c_finetune_640.yaml ;;
+    *) FINETUNE_CONFIG="" ;;
+  esac
 fi
 # The run whose models are evaluated, tuned and shipped.
 FINAL_RUN=$RUN
@@ -92,7 +108,7 @@ TRAIN_SEGMENTS=(
 # (72 of 30 frames, seeds 401-472, worlds per trajectory ~ its length, evenly spaced along it), to test
 # whether more looks beat more frames per look. Measured: they do not (held-out abs rel 0.2501 vs 0.2422
 # for v3, docs/stacknet.md), so v3 stays the shipped model's data.
-if [[ $WORLDS == v4 ]]; then
+if [[ $WORLDS == v4 || $WORLDS == v4c ]]; then
   mapfile -t TRAIN_SEGMENTS < <(python3 - <<'EOF'
 lengths = {"00": 4541, "01": 1101, "02": 4661, "03": 801, "04": 271, "05": 2761, "06": 1101, "07": 1101}
 worlds, frames, total = 72, 30, sum(lengths.values())
@@ -133,7 +149,7 @@ simulate_world() {  # name pose first count seed [simulate options...]
   [[ -f "$DATA/$name/simulation.yaml" ]] && return 0  # written after the last frame
   log "simulate $name (KITTI $pose from pose $first, $count frames, seed $seed) $*"
   run "$DVSO" simulate --out "$DATA/$name" --trajectory "data/kitti_poses/$pose.txt" --first "$first" --count "$count" \
-    --seed "$seed" --appearance varied "$@" --quiet > "$DATA/$name.simulate.log"
+    --seed "$seed" --appearance varied --car-detail "$CAR_DETAIL" "$@" --quiet > "$DATA/$name.simulate.log"
 }
 
 render() {  # name pose first count seed: a training or held-out world at the network's size, colour
