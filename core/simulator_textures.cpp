@@ -257,11 +257,16 @@ Image Facade(int n, int style, std::mt19937_64& rng, uint32_t s) {
   return c.Done();
 }
 
+// True within 1.5 texels of a vertical panel seam of the car paints (tile 2 m, a seam every metre).
+bool OnCarPanelSeam(float x, int n) {
+  return std::min(std::fmod(x * 2.f, 1.f), 1 - std::fmod(x * 2.f, 1.f)) * n / 2 < 1.5f;
+}
+
 Image CarPaint(int n, uint32_t s) {
   Canvas c(n);  // tile 2 m; panel lines every metre, mild dirt towards the bottom
   c.ForEach([&](float x, float y, float& p) {
     p = 0.80f + 0.05f * Fbm(x, y, 8, 4, 0.5f, s) + 0.03f * (HashUnit(int(x * n), int(y * n), s + 1) - 0.5f);
-    if (std::min(std::fmod(x * 2.f, 1.f), 1 - std::fmod(x * 2.f, 1.f)) * n / 2 < 1.5f) p *= 0.5f;
+    if (OnCarPanelSeam(x, n)) p *= 0.5f;
     if (std::fabs(y - 0.5f) * n < 1.2f) p *= 0.7f;
   });
   return c.Done();
@@ -282,7 +287,7 @@ Image CarPaintDetailed(int n, uint32_t s) {
         std::clamp((Fbm(x, y, 4, 6, 0.65f, s + 3) - kCarReflectionCover) * kCarReflectionEdge, 0.f, 1.f);
     p = 0.80f + 0.5f * kCarReflectionContrast * Fbm(x, y, 6, 5, 0.6f, s) - kCarReflectionContrast * sharp +
         0.06f * (HashUnit(int(x * n / 2), int(y * n / 2), s + 1) - 0.5f);
-    if (std::min(std::fmod(x * 2.f, 1.f), 1 - std::fmod(x * 2.f, 1.f)) * n / 2 < 1.5f) p *= 0.5f;
+    if (OnCarPanelSeam(x, n)) p *= 0.5f;
   });
   std::mt19937_64 rng(s + 2);  // own generator: the bank's other textures stay as they were
   std::uniform_real_distribution<float> u(0.f, 1.f);
