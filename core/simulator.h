@@ -32,7 +32,7 @@ struct SimulatorOptions {
   uint64_t seed = 1;                // world layout, textures, exposure and noise
   StereoCamera camera;              // rectified stereo camera (KITTI 00-02 defaults)
   double car_detail = -1;           // share of cars with detailed paint (reflections, dirt); < 0: the look's
-                                    //   own (fixed: 0, varied: drawn from the seed in [0.3, 1])
+                                    //   own (fixed: 0, varied: drawn from the seed in [kVariedCarDetailMin, 1])
   double camera_height = 1.65;      // camera height above the road (m, KITTI)
   double frame_interval = 0.1;      // seconds between trajectory poses (times.txt)
   double max_distance = 300.0;      // nothing farther than this is drawn (m)

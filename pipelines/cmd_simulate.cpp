@@ -11,6 +11,7 @@
 #include "core/kitti_raw_writer.h"
 #include "core/sequence.h"
 #include "core/simulator.h"
+#include "core/simulator_scene.h"
 #include "pipelines/commands.h"
 
 namespace dvso::cli {
@@ -169,10 +170,10 @@ void AddSimulateCommand(CLI::App& app) {
   cmd->add_option("--building-density", o.scene.building_density, "fraction of the street lined by buildings")
       ->capture_default_str();
   cmd->add_option("--car-density", o.scene.car_density, "fraction of parking lanes with cars")->capture_default_str();
-  cmd->add_option("--car-detail", o.car_detail,
-                  "share of cars whose paint shows reflections, dirt and handles (< 0: the appearance's own, "
-                  "fixed 0, varied drawn in [0.3, 1])")
-      ->capture_default_str();
+  std::ostringstream car_detail_help;
+  car_detail_help << "share of cars whose paint shows reflections, dirt and handles (< 0: the appearance's own, "
+                  << "fixed 0, varied drawn in [" << sim::kVariedCarDetailMin << ", 1])";
+  cmd->add_option("--car-detail", o.car_detail, car_detail_help.str())->capture_default_str();
   cmd->add_option("--tree-density", o.scene.tree_density, "relative amount of vegetation")->capture_default_str();
   cmd->add_option("--max-distance", o.max_distance, "drawing distance (m)")->capture_default_str();
   cmd->add_option("--threads", o.num_threads, "render threads")->capture_default_str();

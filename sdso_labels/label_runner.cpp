@@ -58,6 +58,7 @@ LabelRunOptions LoadLabelRunOptions(const std::string& path, const std::string& 
   check.Read("left_right_check", &options.labels.stereo_check.left_right_check);
   check.Read("edge_shift", &options.labels.stereo_check.edge_shift);
   check.Read("edge_max_cost", &options.labels.stereo_check.edge_max_cost);
+  check.Read("edge_distinct_gap", &options.labels.stereo_check.edge_distinct_gap);
   labels.Read("occlusion_radius", &options.labels.projection.occlusion_radius);
   labels.Read("occlusion_margin", &options.labels.projection.occlusion_margin);
   labels.Read("min_depth", &options.labels.projection.min_depth);
@@ -105,6 +106,7 @@ std::string LabelRunOptionsToYaml(const LabelRunOptions& options) {
       << "    left_right_check: " << (l.stereo_check.left_right_check ? "true" : "false") << "\n"
       << "    edge_shift: " << l.stereo_check.edge_shift << "\n"
       << "    edge_max_cost: " << l.stereo_check.edge_max_cost << "\n"
+      << "    edge_distinct_gap: " << l.stereo_check.edge_distinct_gap << "\n"
       << "  occlusion_radius: " << l.projection.occlusion_radius << "\n"
       << "  occlusion_margin: " << l.projection.occlusion_margin << "\n"
       << "  min_depth: " << l.projection.min_depth << "\n"

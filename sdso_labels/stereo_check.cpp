@@ -17,12 +17,16 @@ void StereoCheckOptions::Check() const {
   Require(max_disparity >= 1, "labels: stereo_check.max_disparity must be >= 1");
   Require(edge_shift >= 0 && edge_shift <= 10, "labels: stereo_check.edge_shift must be in [0, 10]");
   Require(edge_max_cost > 0, "labels: stereo_check.edge_max_cost must be > 0");
+  Require(edge_distinct_gap >= 0 && edge_distinct_gap < 2, "labels: stereo_check.edge_distinct_gap must be in [0, 2)");
 }
 
 namespace {
 
 constexpr float kNoMatch = 2.0f;      // cost of a window without texture (1 - ZNCC is in [0, 2])
 constexpr float kMinVariance = 1e-3f;  // windows with less intensity variance are textureless
+// px from the label at which a shifted window's competing matches are taken (edge_distinct_gap):
+// beyond the sub-pixel uncertainty of a right label, within the reach of a silhouette's error.
+constexpr int kEdgeCompetitorOffsets[] = {2, 3, 4};
 
 // 1 - ZNCC between the window of `left` at (x, y) and the window of `right`
 // at (x - d, y) (d < 0 searches to the right: used by the left-right check).
@@ -259,7 +263,14 @@ bool StereoLabelChecker::Keep(int x, int y, float label) {
     for (const auto& s : shifts) {
       const int xs = x + s[0], ys = y + s[1];
       if (ys < r || ys >= left_.rows - r || xs < r || xs >= left_.cols - r) return false;
-      if (CostAt(xs, ys, label) > options_.edge_max_cost) return false;
+      const float cost = CostAt(xs, ys, label);
+      if (cost <= options_.edge_max_cost) continue;
+      if (options_.edge_distinct_gap <= 0) return false;
+      float competitor = kNoMatch;
+      for (const int k : kEdgeCompetitorOffsets) {
+        competitor = std::min({competitor, CostAt(xs, ys, label - k), CostAt(xs, ys, label + k)});
+      }
+      if (competitor - cost < options_.edge_distinct_gap) return false;
     }
   }
   const int best = ScanFullRange(x, y, max_d);

@@ -38,6 +38,12 @@ struct StereoCheckOptions {
   // swaps foreground and background) are dropped. 0 = off.
   int edge_shift = 0;
   double edge_max_cost = 0.5;
+  // A shifted window above `edge_max_cost` still passes when it prefers the label clearly:
+  // its cost there is at least this much below its best cost 2-4 px to either side
+  // (kEdgeCompetitorOffsets). Such a window straddles a silhouette but its texture is
+  // the label's surface (a right label beside an edge), whereas a window that only sees
+  // the other surface or flat noise matches every disparity alike. 0 = off.
+  double edge_distinct_gap = 0.0;
 
   void Check() const;
 };

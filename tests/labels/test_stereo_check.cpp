@@ -191,7 +191,48 @@ TEST(StereoCheck, OptionsAreChecked) {
   bad.max_offset = 3;
   bad.exclusion = 2;
   EXPECT_THROW(bad.Check(), Error);
+  StereoCheckOptions bad_gap;
+  bad_gap.edge_distinct_gap = -0.1;
+  EXPECT_THROW(bad_gap.Check(), Error);
   const cv::Mat left(20, 40, CV_8U, cv::Scalar(0));
   const cv::Mat colour(20, 40, CV_8UC3);
   EXPECT_THROW(StereoLabelChecker(left, colour, StereoCheckOptions()), Error);
+}
+
+TEST(StereoCheck, DistinctShiftedWindowsKeepRightLabelsBesideSilhouettes) {
+  // SquareOverBackground: foreground rows [10, 50), left columns [80, 110), disparity 20, over
+  // a background at disparity 8. Near the square a shifted window covers both surfaces and
+  // exceeds edge_max_cost even at a right label; edge_distinct_gap keeps it when that window
+  // still matches the label clearly better than 2-4 px away.
+  const auto [left, right] = SquareOverBackground();
+  StereoCheckOptions plain;
+  plain.edge_shift = 3;
+  plain.edge_max_cost = 0.4;
+  plain.left_right_check = false;
+  plain.min_cost_gap = 0;
+  plain.max_offset = 0.75;
+  StereoCheckOptions distinct = plain;
+  distinct.edge_distinct_gap = 0.1;
+  StereoLabelChecker old_rule(left, right, plain), new_rule(left, right, distinct);
+  struct Label {
+    int x, y;
+    float disparity;
+  };
+  // Right labels two rows inside the square's top edge and on the background just above and
+  // below it: the plain test drops them, the distinct one keeps them.
+  for (const Label& l : {Label{86, 12, 20.f}, Label{80, 9, 8.f}, Label{79, 8, 8.f}, Label{77, 50, 8.f}}) {
+    EXPECT_FALSE(old_rule.Keep(l.x, l.y, l.disparity)) << l.x << "," << l.y;
+    EXPECT_TRUE(new_rule.Keep(l.x, l.y, l.disparity)) << l.x << "," << l.y;
+  }
+  // Background pixels beside the square labelled with the foreground's disparity (the
+  // silhouette error): the window on their own side sees only background, which matches 20
+  // no better than 16-24, so both rules drop them.
+  for (const Label& l : {Label{84, 9, 20.f}, Label{84, 50, 20.f}, Label{79, 30, 20.f}, Label{78, 30, 20.f},
+                         Label{84, 8, 20.f}, Label{84, 51, 20.f}}) {
+    EXPECT_FALSE(old_rule.Keep(l.x, l.y, l.disparity)) << l.x << "," << l.y;
+    EXPECT_FALSE(new_rule.Keep(l.x, l.y, l.disparity)) << l.x << "," << l.y;
+  }
+  // Inside the surfaces nothing changes.
+  EXPECT_TRUE(new_rule.Keep(95, 30, 20.0f));
+  EXPECT_TRUE(new_rule.Keep(40, 30, 8.0f));
 }
