@@ -52,9 +52,12 @@ struct LabelOptions {
   // Keyframes created after a frame whose points also label it (forward motion keeps
   // them in view); 0 = only the window the frame was tracked against. More hosts mean
   // more labels; wrong projections are caught by the stereo check on the frame's own pair.
-  int future_keyframes = 18;
+  // 40 / 20 (session 37, docs/labels.md): +7-15 % labels and +0-0.7 points within 1 px on 13
+  // unseen worlds against 18 / 9 (session 20), where several candidates meet on a pixel the
+  // occlusion test keeps the nearest.
+  int future_keyframes = 40;
   // Keyframes marginalised before a frame was tracked whose points also label it.
-  int past_keyframes = 9;
+  int past_keyframes = 20;
   // Also label each keyframe with its own candidates whose static stereo match converged
   // (vo::OdometryObserver::OnKeyframeCandidates): the points DSO never activates because
   // they leave the view before the next keyframe, i.e. near objects at the side. They

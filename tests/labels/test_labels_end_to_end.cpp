@@ -183,7 +183,7 @@ TEST(LabelsEndToEnd, ShippedDefaultConfigEqualsBuiltInDefaults) {
   labels::LabelRunOptions defaults;
   defaults.odometry = vo::OdometryOptions::Preset("default");
   EXPECT_EQ(labels::LabelRunOptionsToYaml(loaded), labels::LabelRunOptionsToYaml(defaults));
-  EXPECT_EQ(loaded.labels.future_keyframes, 18);
+  EXPECT_EQ(loaded.labels.future_keyframes, 40);
   EXPECT_TRUE(loaded.labels.stereo_check.enabled);
 }
 
