@@ -52,7 +52,7 @@ struct LabelOptions {
   // Keyframes created after a frame whose points also label it (forward motion keeps
   // them in view); 0 = only the window the frame was tracked against. More hosts mean
   // more labels; wrong projections are caught by the stereo check on the frame's own pair.
-  // 40 / 20 (session 37, docs/labels.md): +7-15 % labels and +0-0.7 points within 1 px on 13
+  // 40 / 20 (session 37, docs/labels.md): +7-22 % labels and -0.01 to +0.74 points within 1 px on 13
   // unseen worlds against 18 / 9 (session 20), where several candidates meet on a pixel the
   // occlusion test keeps the nearest.
   int future_keyframes = 40;
