@@ -114,6 +114,9 @@ std::vector<Variant> Variants() {
   std::vector<Variant> variants = {{"label defaults", defaults}};
   variants.push_back({"max_offset 1 px", defaults});
   variants.back().options.max_offset = 1.0;
+  variants.push_back({"edge test without the distinct-match escape (0.4, the defaults of sessions 20-36)", defaults});
+  variants.back().options.edge_max_cost = 0.4;
+  variants.back().options.edge_distinct_gap = 0;
   variants.push_back({"no shifted-window edge test", defaults});
   variants.back().options.edge_shift = 0;
   return variants;

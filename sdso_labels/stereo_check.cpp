@@ -10,6 +10,10 @@
 
 namespace dvso::labels {
 
+namespace {
+constexpr float kNoMatch = 2.0f;  // cost of a window without texture (1 - ZNCC is in [0, 2])
+}  // namespace
+
 void StereoCheckOptions::Check() const {
   Require(window_radius >= 1 && window_radius <= 10, "labels: stereo_check.window_radius must be in [1, 10]");
   Require(max_offset > 0 && exclusion >= max_offset, "labels: stereo_check needs 0 < max_offset <= exclusion");
@@ -17,12 +21,12 @@ void StereoCheckOptions::Check() const {
   Require(max_disparity >= 1, "labels: stereo_check.max_disparity must be >= 1");
   Require(edge_shift >= 0 && edge_shift <= 10, "labels: stereo_check.edge_shift must be in [0, 10]");
   Require(edge_max_cost > 0, "labels: stereo_check.edge_max_cost must be > 0");
-  Require(edge_distinct_gap >= 0 && edge_distinct_gap < 2, "labels: stereo_check.edge_distinct_gap must be in [0, 2)");
+  Require(edge_distinct_gap >= 0 && edge_distinct_gap < kNoMatch,
+          "labels: stereo_check.edge_distinct_gap must be in [0, 2)");
 }
 
 namespace {
 
-constexpr float kNoMatch = 2.0f;      // cost of a window without texture (1 - ZNCC is in [0, 2])
 constexpr float kMinVariance = 1e-3f;  // windows with less intensity variance are textureless
 // px from the label at which a shifted window's competing matches are taken (edge_distinct_gap):
 // beyond the sub-pixel uncertainty of a right label, within the reach of a silhouette's error.
@@ -265,12 +269,16 @@ bool StereoLabelChecker::Keep(int x, int y, float label) {
       if (ys < r || ys >= left_.rows - r || xs < r || xs >= left_.cols - r) return false;
       const float cost = CostAt(xs, ys, label);
       if (cost <= options_.edge_max_cost) continue;
-      if (options_.edge_distinct_gap <= 0) return false;
+      // The escape needs a match at all (the centred window's max_cost) and competitors that
+      // were measured: a disparity whose window leaves the image is no evidence either way.
+      if (options_.edge_distinct_gap <= 0 || cost > options_.max_cost) return false;
       float competitor = kNoMatch;
       for (const int k : kEdgeCompetitorOffsets) {
-        competitor = std::min({competitor, CostAt(xs, ys, label - k), CostAt(xs, ys, label + k)});
+        for (const float c : {CostAt(xs, ys, label - k), CostAt(xs, ys, label + k)}) {
+          if (c < kNoMatch) competitor = std::min(competitor, c);
+        }
       }
-      if (competitor - cost < options_.edge_distinct_gap) return false;
+      if (competitor >= kNoMatch || competitor - cost < options_.edge_distinct_gap) return false;
     }
   }
   const int best = ScanFullRange(x, y, max_d);

@@ -213,7 +213,10 @@ TEST(StereoCheck, DistinctShiftedWindowsKeepRightLabelsBesideSilhouettes) {
   plain.max_offset = 0.75;
   StereoCheckOptions distinct = plain;
   distinct.edge_distinct_gap = 0.1;
-  StereoLabelChecker old_rule(left, right, plain), new_rule(left, right, distinct);
+  StereoCheckOptions centred_only = plain;
+  centred_only.edge_shift = 0;
+  StereoLabelChecker old_rule(left, right, plain), new_rule(left, right, distinct),
+      no_edge_test(left, right, centred_only);
   struct Label {
     int x, y;
     float disparity;
@@ -224,11 +227,11 @@ TEST(StereoCheck, DistinctShiftedWindowsKeepRightLabelsBesideSilhouettes) {
     EXPECT_FALSE(old_rule.Keep(l.x, l.y, l.disparity)) << l.x << "," << l.y;
     EXPECT_TRUE(new_rule.Keep(l.x, l.y, l.disparity)) << l.x << "," << l.y;
   }
-  // Background pixels beside the square labelled with the foreground's disparity (the
-  // silhouette error): the window on their own side sees only background, which matches 20
-  // no better than 16-24, so both rules drop them.
-  for (const Label& l : {Label{84, 9, 20.f}, Label{84, 50, 20.f}, Label{79, 30, 20.f}, Label{78, 30, 20.f},
-                         Label{84, 8, 20.f}, Label{84, 51, 20.f}}) {
+  // Background pixels beside the square's sides labelled with the foreground's disparity (the
+  // silhouette error): the centred window still matches there, but the window on their own
+  // side sees only background, which matches 20 no better than 16-24, so both rules drop them.
+  for (const Label& l : {Label{79, 30, 20.f}, Label{110, 20, 20.f}, Label{111, 30, 20.f}, Label{110, 40, 20.f}}) {
+    EXPECT_TRUE(no_edge_test.Keep(l.x, l.y, l.disparity)) << l.x << "," << l.y;
     EXPECT_FALSE(old_rule.Keep(l.x, l.y, l.disparity)) << l.x << "," << l.y;
     EXPECT_FALSE(new_rule.Keep(l.x, l.y, l.disparity)) << l.x << "," << l.y;
   }
