@@ -40,10 +40,11 @@ struct StereoCheckOptions {
   double edge_max_cost = 0.5;
   // A shifted window above `edge_max_cost` (but within `max_cost`) still passes when it
   // prefers the label clearly: its cost there is at least this much below its best cost
-  // 2-4 px to either side (kEdgeCompetitorOffsets; disparities whose window leaves the image
-  // are not competitors, and a window with none fails). Such a window straddles a silhouette but its texture is
-  // the label's surface (a right label beside an edge), whereas a window that only sees
-  // the other surface or flat noise matches every disparity alike. 0 = off.
+  // 2-4 px to either side (kEdgeCompetitorOffsets; disparities whose window leaves the
+  // image are not competitors, and a window with none fails). Such a window straddles a
+  // silhouette but its texture is the label's surface (a right label beside an edge),
+  // whereas a window that only sees the other surface or flat noise matches every
+  // disparity alike. 0 = off (session 37, docs/labels.md).
   double edge_distinct_gap = 0.0;
 
   void Check() const;
