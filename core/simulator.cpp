@@ -71,6 +71,9 @@ StreetSimulator::StreetSimulator(const SimulatorOptions& options) : options_(opt
     const int needed = options_.first_frame + (options_.num_frames - 1) * options_.stride + 1;
     trajectory_ = sim::GenerateDrivingPath(needed, options_.generated_speed, options_.frame_interval, options_.seed);
   }
+  if (options_.reconcile_altitude)
+    sim::ApplyAltitudeCorrections(sim::AltitudeCorrections(trajectory_, sim::AltitudeReconciliationOptions()),
+                                  &trajectory_);
   const int total = static_cast<int>(trajectory_.size());
   if (options_.first_frame >= total)
     throw Error(options_.trajectory_path, "--first " + std::to_string(options_.first_frame) +

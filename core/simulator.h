@@ -34,6 +34,10 @@ struct SimulatorOptions {
   double car_detail = -1;           // share of cars with detailed paint (reflections, dirt); < 0: the look's
                                     //   own (fixed: 0, varied: drawn from the seed in [kVariedCarDetailMin, 1])
   double camera_height = 1.65;      // camera height above the road (m, KITTI)
+  // Correct the trajectory's altitude drift where the path comes back to a place, so that the
+  // camera stays camera_height above the one street laid there (sim::AltitudeCorrections; GT
+  // poses are the corrected ones). false = the worlds rendered before session 38 (`--keep-altitude`).
+  bool reconcile_altitude = true;
   double frame_interval = 0.1;      // seconds between trajectory poses (times.txt)
   double max_distance = 300.0;      // nothing farther than this is drawn (m)
   sim::SceneOptions scene;          // densities of buildings, cars, trees

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <random>
 
+#include <Eigen/Sparse>
+
 #include "core/error.h"
 #include "core/lie.h"
 
@@ -22,10 +24,7 @@ StreetPath::StreetPath(const std::vector<Eigen::Isometry3d>& poses, double camer
     : spacing_(spacing) {
   Require(!poses.empty(), "the simulator needs at least one pose");
   Require(spacing > 0.1, "path sample spacing must be > 0.1 m");
-  Eigen::Vector3d down = Eigen::Vector3d::Zero();
-  for (const auto& T : poses) down += T.linear().col(1);
-  Require(down.norm() > 1e-6, "cannot determine the down direction of the trajectory");
-  down_ = down.normalized();
+  down_ = TrajectoryDown(poses);
   axis_a_ = down_.unitOrthogonal();
   axis_b_ = down_.cross(axis_a_);
 
@@ -205,6 +204,135 @@ void StreetPath::MergeRevisits(double radius, double min_gap) {
   for (int j = 0; j < n; ++j) {
     samples_[j].profile.left_edge = left[j];
     samples_[j].profile.right_edge = right[j];
+  }
+}
+
+Eigen::Vector3d TrajectoryDown(const std::vector<Eigen::Isometry3d>& poses) {
+  Eigen::Vector3d down = Eigen::Vector3d::Zero();
+  for (const auto& T : poses) down += T.linear().col(1);
+  Require(down.norm() > 1e-6, "cannot determine the down direction of the trajectory");
+  return down.normalized();
+}
+
+void AltitudeReconciliationOptions::Check() const {
+  Require(radius > 0 && radius < 50, "altitude reconciliation: radius must be in (0, 50) m");
+  Require(min_gap > 2 * radius, "altitude reconciliation: min_gap must exceed twice the radius");
+  Require(max_difference > 0, "altitude reconciliation: max_difference must be > 0");
+  Require(smoothness > 0, "altitude reconciliation: smoothness must be > 0");
+  Require(spacing > 0.1 && spacing <= radius, "altitude reconciliation: spacing must be in (0.1, radius] m");
+}
+
+std::vector<AltitudeCorrection> AltitudeCorrections(const std::vector<Eigen::Isometry3d>& poses,
+                                                    const AltitudeReconciliationOptions& options) {
+  options.Check();
+  const int num_poses = static_cast<int>(poses.size());
+  std::vector<AltitudeCorrection> corrections(num_poses);
+  if (num_poses < 2) return corrections;
+  const Eigen::Vector3d down = TrajectoryDown(poses);
+  // Heights, horizontal positions and arc lengths of the camera centres.
+  std::vector<double> height(num_poses), pose_s(num_poses, 0.0);
+  std::vector<Eigen::Vector3d> flat(num_poses);
+  for (int i = 0; i < num_poses; ++i) {
+    const Eigen::Vector3d p = poses[i].translation();
+    height[i] = p.dot(down);
+    flat[i] = p - height[i] * down;
+    if (i > 0) pose_s[i] = pose_s[i - 1] + (flat[i] - flat[i - 1]).norm();
+  }
+  // Samples every `spacing` m of arc length (linear interpolation between poses).
+  const int n = static_cast<int>(std::floor(pose_s.back() / options.spacing)) + 1;
+  if (n < 3) return corrections;
+  std::vector<Eigen::Vector3d> sample_flat(n);
+  std::vector<double> sample_height(n);
+  for (int k = 0, i = 0; k < n; ++k) {
+    const double s = k * options.spacing;
+    while (i + 2 < num_poses && pose_s[i + 1] < s) ++i;
+    const double len = pose_s[i + 1] - pose_s[i];
+    const double t = len > 1e-9 ? std::clamp((s - pose_s[i]) / len, 0.0, 1.0) : 0.0;
+    sample_flat[k] = flat[i] + t * (flat[i + 1] - flat[i]);
+    sample_height[k] = height[i] + t * (height[i + 1] - height[i]);
+  }
+  // Pairs of samples on the same street from different passes (spatial hash of cell = radius).
+  const Eigen::Vector3d axis_a = down.unitOrthogonal(), axis_b = down.cross(axis_a);
+  auto cell_of = [&](const Eigen::Vector3d& q) {
+    return std::make_pair(static_cast<int>(std::floor(q.dot(axis_a) / options.radius)),
+                          static_cast<int>(std::floor(q.dot(axis_b) / options.radius)));
+  };
+  std::unordered_map<int64_t, std::vector<int>> grid;
+  for (int k = 0; k < n; ++k) {
+    const auto cell = cell_of(sample_flat[k]);
+    grid[CellKey(cell.first, cell.second)].push_back(k);
+  }
+  std::vector<Eigen::Triplet<double>> normal;  // normal equations A^T A (summed by setFromTriplets)
+  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(n);
+  int pairs = 0;
+  for (int k = 0; k < n; ++k) {
+    const auto cell = cell_of(sample_flat[k]);
+    for (int da = -1; da <= 1; ++da)
+      for (int db = -1; db <= 1; ++db) {
+        const auto it = grid.find(CellKey(cell.first + da, cell.second + db));
+        if (it == grid.end()) continue;
+        for (int l : it->second) {
+          if ((l - k) * options.spacing <= options.min_gap) continue;  // also skips l <= k
+          const double distance = (sample_flat[l] - sample_flat[k]).norm();
+          const double difference = sample_height[k] - sample_height[l];
+          if (distance >= options.radius || std::abs(difference) > options.max_difference) continue;
+          // Residual h_k + c_k - h_l - c_l with weight w.
+          const double w = 1.0 - distance / options.radius;
+          normal.emplace_back(k, k, w);
+          normal.emplace_back(l, l, w);
+          normal.emplace_back(k, l, -w);
+          normal.emplace_back(l, k, -w);
+          rhs[k] -= w * difference;
+          rhs[l] += w * difference;
+          ++pairs;
+        }
+      }
+  }
+  if (pairs == 0) return corrections;
+  // Smoothness: second differences c_{k-1} - 2 c_k + c_{k+1}; a small pull to 0 fixes the
+  // offset and tilt the pairs and second differences leave free.
+  constexpr double kAnchor = 1e-3;
+  const double coefficients[3] = {1.0, -2.0, 1.0};
+  for (int k = 1; k + 1 < n; ++k)
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b)
+        normal.emplace_back(k - 1 + a, k - 1 + b, options.smoothness * coefficients[a] * coefficients[b]);
+  for (int k = 0; k < n; ++k) normal.emplace_back(k, k, kAnchor);
+  Eigen::SparseMatrix<double> A(n, n);
+  A.setFromTriplets(normal.begin(), normal.end());
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(A);
+  Require(solver.info() == Eigen::Success, "altitude reconciliation: the normal equations could not be factorised");
+  const Eigen::VectorXd c = solver.solve(rhs);
+  Require(solver.info() == Eigen::Success && c.allFinite(), "altitude reconciliation: no solution");
+  // Slopes at the samples (central differences, one-sided at the ends), then both to the poses.
+  Eigen::VectorXd slope(n);
+  for (int k = 0; k < n; ++k) {
+    const int a = std::max(k - 1, 0), b = std::min(k + 1, n - 1);
+    slope[k] = (c[b] - c[a]) / ((b - a) * options.spacing);
+  }
+  for (int i = 0; i < num_poses; ++i) {
+    const double x = pose_s[i] / options.spacing;
+    const int k = std::clamp(static_cast<int>(std::floor(x)), 0, n - 2);
+    const double t = std::clamp(x - k, 0.0, 1.0);
+    corrections[i].offset = c[k] + t * (c[k + 1] - c[k]);
+    corrections[i].slope = slope[k] + t * (slope[k + 1] - slope[k]);
+  }
+  return corrections;
+}
+
+void ApplyAltitudeCorrections(const std::vector<AltitudeCorrection>& corrections,
+                              std::vector<Eigen::Isometry3d>* poses) {
+  Require(corrections.size() == poses->size(), "altitude corrections: one per pose needed");
+  if (poses->empty()) return;
+  const Eigen::Vector3d down = TrajectoryDown(*poses);
+  for (size_t i = 0; i < poses->size(); ++i) {
+    Eigen::Isometry3d& T = (*poses)[i];
+    T.translation() += corrections[i].offset * down;
+    // Horizontal viewing direction; rotating it about forward x down by +angle turns it towards down.
+    const Eigen::Vector3d forward = T.linear().col(2) - T.linear().col(2).dot(down) * down;
+    if (forward.norm() < 1e-6 || corrections[i].slope == 0) continue;  // looking straight down: no pitch
+    const Eigen::Vector3d axis = forward.normalized().cross(down).normalized();
+    T.linear() = Eigen::AngleAxisd(std::atan(corrections[i].slope), axis).toRotationMatrix() * T.linear();
   }
 }
 

@@ -59,7 +59,8 @@ void WriteSimulationYaml(const std::string& path, const StreetSimulator& simulat
     out << "camera: {width: " << o.camera.left.width << ", height: " << o.camera.left.height
         << ", fx: " << o.camera.left.fx << ", fy: " << o.camera.left.fy << ", cx: " << o.camera.left.cx
         << ", cy: " << o.camera.left.cy << ", baseline: " << o.camera.baseline << "}\n";
-    out << "camera_height: " << o.camera_height << "\nframe_interval: " << o.frame_interval
+    out << "camera_height: " << o.camera_height
+        << "\nreconcile_altitude: " << (o.reconcile_altitude ? "true" : "false") << "\nframe_interval: " << o.frame_interval
         << "\nmax_distance: " << o.max_distance << "\n";
     out << "exposure_drift: " << (o.exposure_drift ? "true" : "false") << "\nexposure_sigma: " << o.exposure_sigma
         << "\nexposure_max: " << o.exposure_max << "\nbias_sigma: " << o.bias_sigma << "\n";

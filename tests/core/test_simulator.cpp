@@ -21,6 +21,7 @@
 #include "core/fs_util.h"
 #include "core/sequence.h"
 #include "core/simulator.h"
+#include "core/simulator_path.h"
 #include "core/trajectory.h"
 #include "tests/temp_dir.h"
 
@@ -372,9 +373,19 @@ TEST(Simulator, WritesKittiLayoutWithGroundTruth) {
   const Trajectory poses = ReadTrajectory((dir / "poses.txt").string());
   ASSERT_EQ(poses.size(), 3u);
   EXPECT_TRUE(poses.poses[0].T_world_camera.isApprox(Eigen::Isometry3d::Identity(), 1e-9));
+  // They are KITTI's poses with the altitude drift of its revisits corrected (sim::AltitudeCorrections).
   const Trajectory kitti = ReadTrajectory(o.trajectory_path);
-  const Eigen::Isometry3d expected = kitti.poses[120].T_world_camera.inverse() * kitti.poses[124].T_world_camera;
+  std::vector<Eigen::Isometry3d> corrected;
+  for (const auto& p : kitti.poses) corrected.push_back(p.T_world_camera);
+  sim::ApplyAltitudeCorrections(sim::AltitudeCorrections(corrected, {}), &corrected);
+  const Eigen::Isometry3d expected = corrected[120].inverse() * corrected[124];
   EXPECT_TRUE(poses.poses[2].T_world_camera.isApprox(expected, 1e-6));
+  // --keep-altitude: KITTI's poses as they are.
+  o.reconcile_altitude = false;
+  const StreetSimulator raw(o);
+  const Eigen::Isometry3d raw_expected = kitti.poses[120].T_world_camera.inverse() * kitti.poses[124].T_world_camera;
+  EXPECT_TRUE((raw.WorldFromCamera(0).inverse() * raw.WorldFromCamera(2)).isApprox(raw_expected, 1e-6));
+  EXPECT_FALSE(raw_expected.isApprox(expected, 1e-6));  // the correction is not a no-op here
   const std::vector<double> times = ReadTimes((dir / "times.txt").string());
   ASSERT_EQ(times.size(), 3u);
   EXPECT_NEAR(times[2] - times[1], 0.2, 1e-9);

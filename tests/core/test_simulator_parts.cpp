@@ -1,5 +1,5 @@
 // Unit tests of the simulator's building blocks: mip-mapped texture lookups,
-// the street path (road height, zones, revisit merging) and sun shadows.
+// the street path (road height, zones, revisit merging, altitude reconciliation) and sun shadows.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -8,6 +8,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/error.h"
 #include "core/simulator_path.h"
 #include "core/simulator_shadows.h"
 #include "core/simulator_textures.h"
@@ -142,6 +143,71 @@ TEST(SimulatorPath, DrivingBackAlongTheSameStreetIsMerged) {
   const PathSample& first = path.samples()[path.SampleAt(30.0)];
   EXPECT_LE(first.profile.left_edge, -3.0 - 2.0 + 1e-9);
   EXPECT_TRUE(path.InZone(first.road + Eigen::Vector3d(-3.0, 0, 0), Zone::kRoad, 0.0));
+}
+
+// 100 m forward, a U-turn 3 m to the left, 100 m back `drift` m lower (y down): a revisit whose
+// recorded altitude drifted, as KITTI's GPS/IMU poses do.
+std::vector<Eigen::Isometry3d> RevisitWithDrift(double drift) {
+  std::vector<Eigen::Isometry3d> poses = StraightPath(101, 1.0, 0.0);
+  for (int i = 0; i <= 100; ++i) {
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.linear() = Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitY()).toRotationMatrix();
+    T.translation() = Eigen::Vector3d(-3.0, drift, 100.0 - i);
+    poses.push_back(T);
+  }
+  return poses;
+}
+
+TEST(SimulatorPath, AltitudeDriftOfARevisitIsReconciledSmoothly) {
+  const double drift = 0.6;
+  std::vector<Eigen::Isometry3d> poses = RevisitWithDrift(drift);
+  const std::vector<AltitudeCorrection> corrections = AltitudeCorrections(poses, AltitudeReconciliationOptions());
+  ASSERT_EQ(corrections.size(), poses.size());
+  // Where the passes are paired (>= 60 m of path apart: z < ~70 m), both now lie at one height.
+  for (int z = 0; z <= 60; z += 10) {
+    const int forward = z, back = 101 + (100 - z);
+    const double height_forward = poses[forward].translation().y() + corrections[forward].offset;
+    const double height_back = poses[back].translation().y() + corrections[back].offset;
+    EXPECT_NEAR(height_forward, height_back, 0.03) << "z " << z;
+  }
+  // The change is spread along the path: no step between poses (1 m apart, 3 m across the U-turn),
+  // a slope of ~1 % at most, and the slope is the offset's derivative along the path.
+  for (size_t i = 1; i < poses.size(); ++i) {
+    const double arc = i == 101 ? 3.0 : 1.0;
+    EXPECT_LT(std::abs(corrections[i].offset - corrections[i - 1].offset) / arc, 0.015) << i;
+    EXPECT_LT(std::abs(corrections[i].slope), 0.015) << i;
+  }
+  for (int i : {30, 90, 110, 170}) {
+    const double difference = (corrections[i + 1].offset - corrections[i - 1].offset) / 2.0;
+    EXPECT_NEAR(corrections[i].slope, difference, 1e-3) << i;
+  }
+  // A path that never comes back is left exactly as it is.
+  for (const AltitudeCorrection& c : AltitudeCorrections(StraightPath(300, 1.0, 0.02), {})) {
+    EXPECT_EQ(c.offset, 0.0);
+    EXPECT_EQ(c.slope, 0.0);
+  }
+  // Passes farther apart vertically than max_difference are different levels (a bridge).
+  AltitudeReconciliationOptions bridge;
+  bridge.max_difference = 0.5;
+  for (const AltitudeCorrection& c : AltitudeCorrections(poses, bridge)) EXPECT_EQ(c.offset, 0.0);
+  bridge.min_gap = 10;  // < 2 x radius: neighbours on one pass would count as a revisit
+  EXPECT_THROW(AltitudeCorrections(poses, bridge), Error);
+}
+
+TEST(SimulatorPath, AppliedCorrectionMovesAndPitchesThePoseByHand) {
+  // Camera at the origin looking along +z (KITTI: y down); the correction lowers it by 0.5 m
+  // and the road ahead by 10 % more per metre.
+  std::vector<Eigen::Isometry3d> poses(2, Eigen::Isometry3d::Identity());
+  poses[1].translation() = Eigen::Vector3d(0, 0, 1);
+  ApplyAltitudeCorrections({{0.5, 0.1}, {0.0, 0.0}}, &poses);
+  EXPECT_TRUE(poses[0].translation().isApprox(Eigen::Vector3d(0, 0.5, 0), 1e-12));
+  // Forward turned towards down by atan(0.1): (0, sin, cos); the x axis stays.
+  const double angle = std::atan(0.1);
+  EXPECT_TRUE(poses[0].linear().col(2).isApprox(Eigen::Vector3d(0, std::sin(angle), std::cos(angle)), 1e-12));
+  EXPECT_TRUE(poses[0].linear().col(0).isApprox(Eigen::Vector3d::UnitX(), 1e-12));
+  EXPECT_TRUE(poses[1].isApprox(Eigen::Isometry3d(Eigen::Translation3d(0, 0, 1)), 1e-12));
+  std::vector<AltitudeCorrection> too_few(1);
+  EXPECT_THROW(ApplyAltitudeCorrections(too_few, &poses), Error);
 }
 
 TEST(SimulatorShadows, BoxShadowIsCastAwayFromTheSun) {
