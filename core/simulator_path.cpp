@@ -215,6 +215,7 @@ Eigen::Vector3d TrajectoryDown(const std::vector<Eigen::Isometry3d>& poses) {
 }
 
 void AltitudeReconciliationOptions::Check() const {
+  // Beyond ~50 m, pairs would join parallel streets of a town, not one street seen twice.
   Require(radius > 0 && radius < 50, "altitude reconciliation: radius must be in (0, 50) m");
   Require(min_gap > 2 * radius, "altitude reconciliation: min_gap must exceed twice the radius");
   Require(max_difference > 0, "altitude reconciliation: max_difference must be > 0");
@@ -291,13 +292,12 @@ std::vector<AltitudeCorrection> AltitudeCorrections(const std::vector<Eigen::Iso
   if (pairs == 0) return corrections;
   // Smoothness: second differences c_{k-1} - 2 c_k + c_{k+1}; a small pull to 0 fixes the
   // offset and tilt the pairs and second differences leave free.
-  constexpr double kAnchor = 1e-3;
   const double coefficients[3] = {1.0, -2.0, 1.0};
   for (int k = 1; k + 1 < n; ++k)
     for (int a = 0; a < 3; ++a)
       for (int b = 0; b < 3; ++b)
         normal.emplace_back(k - 1 + a, k - 1 + b, options.smoothness * coefficients[a] * coefficients[b]);
-  for (int k = 0; k < n; ++k) normal.emplace_back(k, k, kAnchor);
+  for (int k = 0; k < n; ++k) normal.emplace_back(k, k, kAltitudeAnchorWeight);
   Eigen::SparseMatrix<double> A(n, n);
   A.setFromTriplets(normal.begin(), normal.end());
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(A);
@@ -325,13 +325,21 @@ void ApplyAltitudeCorrections(const std::vector<AltitudeCorrection>& corrections
   Require(corrections.size() == poses->size(), "altitude corrections: one per pose needed");
   if (poses->empty()) return;
   const Eigen::Vector3d down = TrajectoryDown(*poses);
-  for (size_t i = 0; i < poses->size(); ++i) {
+  const int n = static_cast<int>(poses->size());
+  auto horizontal = [&](const Eigen::Vector3d& v) { return Eigen::Vector3d(v - v.dot(down) * down); };
+  // Directions of travel (the slope is along the path, whichever way the camera looks), from the
+  // original positions.
+  std::vector<Eigen::Vector3d> travel(n);
+  for (int i = 0; i < n; ++i) {
+    travel[i] = horizontal((*poses)[std::min(i + 1, n - 1)].translation() - (*poses)[std::max(i - 1, 0)].translation());
+    if (travel[i].norm() < kStandingStillDistance) travel[i] = horizontal((*poses)[i].linear().col(2));
+  }
+  for (int i = 0; i < n; ++i) {
     Eigen::Isometry3d& T = (*poses)[i];
     T.translation() += corrections[i].offset * down;
-    // Horizontal viewing direction; rotating it about forward x down by +angle turns it towards down.
-    const Eigen::Vector3d forward = T.linear().col(2) - T.linear().col(2).dot(down) * down;
-    if (forward.norm() < 1e-6 || corrections[i].slope == 0) continue;  // looking straight down: no pitch
-    const Eigen::Vector3d axis = forward.normalized().cross(down).normalized();
+    // Rotating the direction of travel about travel x down by +angle turns it towards down.
+    if (travel[i].norm() < kStandingStillDistance || corrections[i].slope == 0) continue;  // standing, looking down
+    const Eigen::Vector3d axis = travel[i].normalized().cross(down).normalized();
     T.linear() = Eigen::AngleAxisd(std::atan(corrections[i].slope), axis).toRotationMatrix() * T.linear();
   }
 }

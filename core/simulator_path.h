@@ -102,10 +102,19 @@ class StreetPath {
 // simulator lays ONE street per place, so without a correction a revisit drives with the camera
 // up to 2 m above or below the road it sees (a merged revisit reuses the earlier street) and
 // crossings get steps and slots through which the ground's underside shows.
+// Weight of the pull of every correction towards 0 in AltitudeCorrections: it only fixes the
+// offset and tilt that the pairs and the second differences leave free.
+constexpr double kAltitudeAnchorWeight = 1e-3;
+// A pose whose neighbours are closer than this (m, horizontally) stands still: its direction of
+// travel is taken from the camera's viewing direction instead.
+constexpr double kStandingStillDistance = 0.05;
+
 struct AltitudeReconciliationOptions {
   double radius = 12.0;         // m: path points this close horizontally share road or sidewalk
   double min_gap = 60.0;        // m of arc length between them (closer = the same pass)
-  double max_difference = 8.0;  // m: passes farther apart vertically are different levels (a bridge)
+  // m: passes farther apart vertically are different levels (a bridge deck is >= ~5 m above the
+  // road below it); above KITTI 08's largest drift between passes (6.4 m).
+  double max_difference = 8.0;
   // Weight of the correction's second differences (samples 2 m apart; a pair of passes weighs
   // 1 - distance / radius). 3000: the slope the correction adds stays <= 1.2 % at 99 % of the
   // samples of KITTI 00, 05, 06, 07, 09; 02 drifts 7 m and gets up to 6 % over long stretches,
@@ -128,15 +137,15 @@ struct AltitudeCorrection {
 
 // Per-pose altitude correction c_i minimising
 //   sum_pairs w_kl (h_k + c_k - h_l - c_l)^2 + smoothness * sum_k (c_{k-1} - 2 c_k + c_{k+1})^2
-//   + 1e-3 * sum_k c_k^2
+//   + kAltitudeAnchorWeight * sum_k c_k^2
 // over samples every `spacing` m of arc length (h = height along down; pairs as in the options,
 // w = 1 - distance / radius), interpolated linearly to the poses (the slope from central
 // differences). A path that never comes back to a place gets zero corrections exactly.
 std::vector<AltitudeCorrection> AltitudeCorrections(const std::vector<Eigen::Isometry3d>& poses,
                                                     const AltitudeReconciliationOptions& options);
 
-// Moves pose i by offset_i * down and pitches it by atan(slope_i) about the horizontal axis
-// across its viewing direction (forward towards down where the offset grows along the path), so
+// Moves pose i by offset_i * down and pitches it by atan(slope_i) about the horizontal axis across
+// its direction of travel (that direction towards down where the offset grows along the path), so
 // that the camera keeps its attitude relative to the corrected road: a correction spread over a
 // long stretch tilts the road by up to a few per cent (KITTI 02), which a camera left level would
 // see as a horizon shifted by f_x * slope pixels.

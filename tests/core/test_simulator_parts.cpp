@@ -208,6 +208,13 @@ TEST(SimulatorPath, AppliedCorrectionMovesAndPitchesThePoseByHand) {
   EXPECT_TRUE(poses[1].isApprox(Eigen::Isometry3d(Eigen::Translation3d(0, 0, 1)), 1e-12));
   std::vector<AltitudeCorrection> too_few(1);
   EXPECT_THROW(ApplyAltitudeCorrections(too_few, &poses), Error);
+  // Reversing: the camera still looks along +z but travels along -z; the road lowered ahead in the
+  // direction of travel tilts the travel direction down, i.e. the camera's view up.
+  std::vector<Eigen::Isometry3d> reversing(2, Eigen::Isometry3d::Identity());
+  reversing[0].translation() = Eigen::Vector3d(0, 0, 1);
+  ApplyAltitudeCorrections({{0.0, 0.1}, {0.0, 0.1}}, &reversing);
+  for (const auto& T : reversing)
+    EXPECT_TRUE(T.linear().col(2).isApprox(Eigen::Vector3d(0, -std::sin(angle), std::cos(angle)), 1e-12));
 }
 
 TEST(SimulatorShadows, BoxShadowIsCastAwayFromTheSun) {
