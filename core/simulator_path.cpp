@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <utility>
 
 #include <Eigen/Sparse>
 
@@ -15,6 +16,27 @@ namespace {
 // Hash key of a 2D grid cell (no signed shifts: cells can be negative).
 int64_t CellKey(int a, int b) {
   return static_cast<int64_t>((static_cast<uint64_t>(static_cast<uint32_t>(a)) << 32) | static_cast<uint32_t>(b));
+}
+
+// The camera centres split along `down`: heights, horizontal positions and horizontal arc lengths.
+struct CameraTrack {
+  std::vector<double> height, s;
+  std::vector<Eigen::Vector3d> flat;
+};
+
+CameraTrack TrackOf(const std::vector<Eigen::Isometry3d>& poses, const Eigen::Vector3d& down) {
+  const int n = static_cast<int>(poses.size());
+  CameraTrack track;
+  track.height.resize(n);
+  track.flat.resize(n);
+  track.s.assign(n, 0.0);
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector3d p = poses[i].translation();
+    track.height[i] = p.dot(down);
+    track.flat[i] = p - track.height[i] * down;
+    if (i > 0) track.s[i] = track.s[i - 1] + (track.flat[i] - track.flat[i - 1]).norm();
+  }
+  return track;
 }
 
 }  // namespace
@@ -30,15 +52,10 @@ StreetPath::StreetPath(const std::vector<Eigen::Isometry3d>& poses, double camer
 
   // Horizontal positions, heights and arc lengths of the camera centres.
   const int n = static_cast<int>(poses.size());
-  std::vector<Eigen::Vector3d> flat(n);
-  std::vector<double> height(n);
-  pose_s_.assign(n, 0.0);
-  for (int i = 0; i < n; ++i) {
-    const Eigen::Vector3d p = poses[i].translation();
-    height[i] = p.dot(down_);
-    flat[i] = p - height[i] * down_;
-    if (i > 0) pose_s_[i] = pose_s_[i - 1] + (flat[i] - flat[i - 1]).norm();
-  }
+  CameraTrack track = TrackOf(poses, down_);
+  const std::vector<Eigen::Vector3d>& flat = track.flat;
+  const std::vector<double>& height = track.height;
+  pose_s_ = std::move(track.s);
   const double total = pose_s_.back();
   // Driving direction at the ends: from positions 5 m apart, or the camera's
   // optical axis when the camera hardly moves.
@@ -230,15 +247,10 @@ std::vector<AltitudeCorrection> AltitudeCorrections(const std::vector<Eigen::Iso
   std::vector<AltitudeCorrection> corrections(num_poses);
   if (num_poses < 2) return corrections;
   const Eigen::Vector3d down = TrajectoryDown(poses);
-  // Heights, horizontal positions and arc lengths of the camera centres.
-  std::vector<double> height(num_poses), pose_s(num_poses, 0.0);
-  std::vector<Eigen::Vector3d> flat(num_poses);
-  for (int i = 0; i < num_poses; ++i) {
-    const Eigen::Vector3d p = poses[i].translation();
-    height[i] = p.dot(down);
-    flat[i] = p - height[i] * down;
-    if (i > 0) pose_s[i] = pose_s[i - 1] + (flat[i] - flat[i - 1]).norm();
-  }
+  const CameraTrack track = TrackOf(poses, down);
+  const std::vector<double>& height = track.height;
+  const std::vector<double>& pose_s = track.s;
+  const std::vector<Eigen::Vector3d>& flat = track.flat;
   // Samples every `spacing` m of arc length (linear interpolation between poses).
   const int n = static_cast<int>(std::floor(pose_s.back() / options.spacing)) + 1;
   if (n < 3) return corrections;
