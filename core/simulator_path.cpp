@@ -174,10 +174,38 @@ bool StreetPath::AnySampleZoneContains(const Eigen::Vector3d& q, Zone zone, doub
   return false;
 }
 
+void StreetPath::DropExtensionsOverThePath(double radius, double min_gap) {
+  const double total = pose_s_.back();
+  const int reach = static_cast<int>(std::ceil(radius / cell_size_));
+  for (PathSample& e : samples_) {
+    if (e.s >= 0 && e.s <= total) continue;  // a sample of the driven path
+    const auto cell = Cell(e.road);
+    int nearest = -1;
+    double nearest_distance = radius;
+    for (int da = -reach; da <= reach; ++da)
+      for (int db = -reach; db <= reach; ++db) {
+        const auto it = grid_.find(CellKey(cell.first + da, cell.second + db));
+        if (it == grid_.end()) continue;
+        for (int i : it->second) {
+          const PathSample& r = samples_[i];
+          if (r.s < 0 || r.s > total || std::abs(r.s - e.s) < min_gap) continue;
+          const Eigen::Vector3d d = r.road - e.road;
+          const double distance = (d - d.dot(down_) * down_).norm();
+          if (distance < nearest_distance) {
+            nearest_distance = distance;
+            nearest = i;
+          }
+        }
+      }
+    if (nearest >= 0) e.merged_into = nearest;
+  }
+}
+
 void StreetPath::MergeRevisits(double radius, double min_gap) {
   const int n = static_cast<int>(samples_.size());
   for (int j = 0; j < n; ++j) {
     PathSample& b = samples_[j];
+    if (b.merged_into >= 0) continue;  // a dropped extension (DropExtensionsOverThePath)
     const auto cell = Cell(b.road);
     int best = -1;
     double best_distance = radius;

@@ -66,6 +66,14 @@ class StreetPath {
   // `min_gap` m of arc length before, driving parallel or anti-parallel) as
   // merged and widens the earlier sample's road to contain their lane.
   void MergeRevisits(double radius, double min_gap);
+  // The straight streets added before the first and after the last pose are invented: where one
+  // runs within `radius` m of a sample of the driven path at least `min_gap` m of arc length away
+  // (a loop: KITTI 06's street before its start runs through its frames 750-790, 00's after its end
+  // through its start), its samples are marked merged into that sample and build nothing. Else
+  // they were laid at the first or last pose's height through the driven street, and a later pass
+  // merged into them drove with the camera up to 0.7 m below its height above the road. Call
+  // before MergeRevisits.
+  void DropExtensionsOverThePath(double radius, double min_gap);
 
   // Vertical clearance (m) between an object and a street at another level:
   // a street whose road lies more than this above the object's top or below

@@ -145,6 +145,50 @@ TEST(SimulatorPath, DrivingBackAlongTheSameStreetIsMerged) {
   EXPECT_TRUE(path.InZone(first.road + Eigen::Vector3d(-3.0, 0, 0), Zone::kRoad, 0.0));
 }
 
+TEST(SimulatorPath, InventedStreetsBeyondTheEndsYieldToTheDrivenPath) {
+  // 100 m along +z from the origin, then around: left to x = -100, back to z = -100, and across to
+  // x = +100, 1 m lower (y down), crossing the street the path adds straight behind its start (x = 0, z < 0).
+  std::vector<Eigen::Isometry3d> poses;
+  auto leg = [&](const Eigen::Vector3d& from, const Eigen::Vector3d& to, double y) {
+    const Eigen::Vector3d dir = (to - from).normalized();
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.linear().col(2) = dir;
+    T.linear().col(1) = Eigen::Vector3d::UnitY();
+    T.linear().col(0) = T.linear().col(1).cross(dir);
+    for (double t = 0; t < (to - from).norm(); t += 1.0) {
+      T.translation() = from + t * dir + Eigen::Vector3d(0, y, 0);
+      poses.push_back(T);
+    }
+  };
+  leg({0, 0, 0}, {0, 0, 100}, 0.0);
+  leg({0, 0, 100}, {-100, 0, 100}, 0.0);
+  leg({-100, 0, 100}, {-100, 0, -100}, 0.0);
+  leg({-100, 0, -100}, {100, 0, -100}, 1.0);
+  StreetPath path(poses, 1.65, 2.0, 300.0);
+  path.DropExtensionsOverThePath(12.0, 60.0);
+  path.MergeRevisits(4.0, 60.0);
+  const double total = path.PoseArcLength(static_cast<int>(poses.size()) - 1);
+  int dropped = 0, onto_extension = 0;
+  for (const PathSample& sample : path.samples()) {
+    const bool extension = sample.s < 0 || sample.s > total;
+    if (extension && sample.merged_into >= 0) {
+      ++dropped;
+      // Only where the driven path is near: the crossing at z = -100 (x = 0) or the last leg's end.
+      const PathSample& onto = path.samples()[sample.merged_into];
+      EXPECT_LT((sample.road - onto.road).cwiseProduct(Eigen::Vector3d(1, 0, 1)).norm(), 12.0);
+    }
+    if (!extension && sample.merged_into >= 0) {
+      const PathSample& onto = path.samples()[sample.merged_into];
+      onto_extension += onto.s < 0 || onto.s > total;
+    }
+  }
+  EXPECT_GE(dropped, 10);  // ~24 m of the pre-start street across the last leg
+  EXPECT_EQ(onto_extension, 0);
+  // The pre-start street right behind the start (within 60 m of path) stays.
+  EXPECT_LT(path.samples()[path.SampleAt(-10.0)].merged_into, 0);
+  EXPECT_GE(path.samples()[path.SampleAt(-100.0)].merged_into, 0);
+}
+
 // 100 m forward, a U-turn 3 m to the left, 100 m back `drift` m lower (y down): a revisit whose
 // recorded altitude drifted, as KITTI's GPS/IMU poses do.
 std::vector<Eigen::Isometry3d> RevisitWithDrift(double drift) {
