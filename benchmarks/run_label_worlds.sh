@@ -7,7 +7,8 @@
 # labels/frame, share within 1 px, within 3 %, MAE, and where the > 1 px labels sit.
 #
 #   benchmarks/run_label_worlds.sh            (env: DVSO, OUT, COUNT=150 frames per world,
-#                                              WORLDS="style:posefile:first:seed[:simulate args] ...", LABEL_ARGS)
+#                                              WORLDS="style:posefile:first:seed[:simulate args] ...", LABEL_ARGS,
+#                                              WORLD_VERSION = the binary's simulator world version)
 # Optional simulate arguments are comma-separated, e.g. varied:08:1500:9633:--no-edge-aa or
 # varied:00:1000:9631:--noise-sigma,3.5 (looks beyond the appearance styles: aliased silhouettes, sensor noise).
 # Also writes $OUT/label_worlds.json and $OUT/label_worlds.md (the table, markdown).
@@ -21,6 +22,8 @@ COUNT="${COUNT:-150}"
 WORLDS="${WORLDS:-fixed:08:1000:9601 varied:08:2000:9602 varied:09:300:9603 varied:10:300:9604 varied:00:2000:9605 varied:05:500:9606}"
 read -r -a LABEL_EXTRA <<< "${LABEL_ARGS:-}"
 [[ -x "$DVSO" ]] || { echo "error: $DVSO not built (scripts/build.sh, or set DVSO=path/to/dvso)" >&2; exit 1; }
+WORLD_VERSION="${WORLD_VERSION:-$("$DVSO" --version | sed -n 's/.*simulator world version \([0-9][0-9]*\).*/\1/p')}"
+[[ -n "$WORLD_VERSION" ]] || { echo "error: $DVSO --version names no simulator world version (an older binary?)" >&2; exit 1; }
 mkdir -p "$OUT"
 
 for world in $WORLDS; do
@@ -30,10 +33,17 @@ for world in $WORLDS; do
   suffix="${sim_args//[^A-Za-z0-9.]/}"
   name="${style}_${poses}_${seed}${suffix:+_$suffix}"
   seq="$OUT/$name"
+  # A world cached by an earlier run is reused only when it is the simulator world version (core/simulator.h)
+  # this run renders; else it is rendered again (its labels would measure another world).
+  if [[ -f "$seq/simulation.yaml" ]] && ! grep -qx "world_version: $WORLD_VERSION" "$seq/simulation.yaml"; then
+    echo "[$(date -u +%H:%M:%S)] $name: cached world is not world version $WORLD_VERSION, rendering it again"
+    rm -rf "$seq"
+  fi
   if [[ ! -f "$seq/simulation.yaml" ]]; then
-    echo "[$(date -u +%H:%M:%S)] simulate $name ($COUNT frames)"
+    echo "[$(date -u +%H:%M:%S)] simulate $name ($COUNT frames, world version $WORLD_VERSION)"
     "$DVSO" simulate --out "$seq" --trajectory "$REPO/data/kitti_poses/$poses.txt" --first "$first" --count "$COUNT" \
-      --seed "$seed" --appearance "$style" --quiet "${SIM_EXTRA[@]}" > "$OUT/$name.simulate.log"
+      --seed "$seed" --appearance "$style" --world-version "$WORLD_VERSION" --quiet "${SIM_EXTRA[@]}" \
+      > "$OUT/$name.simulate.log"
   fi
   echo "[$(date -u +%H:%M:%S)] labels $name"
   /usr/bin/env time -f "%e" -o "$OUT/$name.labels.seconds" \

@@ -14,6 +14,8 @@ namespace {
 }  // namespace
 
 void SimulatorOptions::Check() const {
+  Require(world_version >= 1 && world_version <= kSimulatorWorldVersion,
+          "--world-version must be in [1, " + std::to_string(kSimulatorWorldVersion) + "]");
   Require(first_frame >= 0, "--first must be >= 0");
   Require(num_frames == -1 || num_frames >= 1, "--count must be >= 1 (or -1 for all frames)");
   Require(stride >= 1, "--stride must be >= 1");
@@ -71,7 +73,8 @@ StreetSimulator::StreetSimulator(const SimulatorOptions& options) : options_(opt
     const int needed = options_.first_frame + (options_.num_frames - 1) * options_.stride + 1;
     trajectory_ = sim::GenerateDrivingPath(needed, options_.generated_speed, options_.frame_interval, options_.seed);
   }
-  if (options_.reconcile_altitude)
+  options_.scene.extensions_yield = options_.world_version >= 3;
+  if (options_.world_version >= 2)
     sim::ApplyAltitudeCorrections(sim::AltitudeCorrections(trajectory_, sim::AltitudeReconciliationOptions()),
                                   &trajectory_);
   const int total = static_cast<int>(trajectory_.size());

@@ -20,6 +20,16 @@
 
 namespace dvso {
 
+// Which world given options render. Bumped whenever the same options and seed render another world; every
+// version stays renderable (SimulatorOptions::world_version, `dvso simulate --world-version`), so a model's
+// training worlds can be rendered again exactly, and scripts caching worlds (scripts/train_stacknet.sh,
+// benchmarks/run_label_worlds.sh) can tell a stale one. Written to simulation.yaml as `world_version` and
+// printed by `dvso --version`.
+//   1: before session 38 (simulation.yaml has no world_version and no reconcile_altitude: true)
+//   2: altitude drift of recorded paths reconciled at revisits (session 38; its simulation.yaml says
+//      `reconcile_altitude: true`)
+//   3: the invented streets before the first / after the last pose yield to the driven path (session 39)
+constexpr int kSimulatorWorldVersion = 3;
 constexpr double kVariedCameraHeightRange = 0.1;  // varied look: camera height = camera_height +- this (m)
 constexpr double kVariedHeightJitter = 0.03;      // varied look: per-frame height bounce bound at least this (m)
 
@@ -34,10 +44,12 @@ struct SimulatorOptions {
   double car_detail = -1;           // share of cars with detailed paint (reflections, dirt); < 0: the look's
                                     //   own (fixed: 0, varied: drawn from the seed in [kVariedCarDetailMin, 1])
   double camera_height = 1.65;      // camera height above the road (m, KITTI)
-  // Correct the trajectory's altitude drift where the path comes back to a place, so that the
-  // camera stays camera_height above the one street laid there (sim::AltitudeCorrections; GT
-  // poses are the corrected ones). false = the worlds rendered before session 38 (`--keep-altitude`).
-  bool reconcile_altitude = true;
+  // The world of this version (1..kSimulatorWorldVersion, history above). From 2 the trajectory's
+  // altitude drift is corrected where the path comes back to a place, so that the camera stays
+  // camera_height above the one street laid there (sim::AltitudeCorrections; GT poses are the
+  // corrected ones); from 3 the invented streets beyond the path's ends yield to the driven path
+  // (SceneOptions::extensions_yield, set from this by the constructor).
+  int world_version = kSimulatorWorldVersion;
   double frame_interval = 0.1;      // seconds between trajectory poses (times.txt)
   double max_distance = 300.0;      // nothing farther than this is drawn (m)
   sim::SceneOptions scene;          // densities of buildings, cars, trees

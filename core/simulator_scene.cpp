@@ -433,7 +433,7 @@ Scene BuildStreetScene(StreetPath& path, const SceneOptions& options, uint64_t s
                   std::sin(elevation) * scene.down)
                      .normalized();
   AssignProfiles(path, seed);
-  path.DropExtensionsOverThePath(AltitudeReconciliationOptions().radius, 60.0);
+  if (options.extensions_yield) path.DropExtensionsOverThePath(AltitudeReconciliationOptions().radius, 60.0);
   path.MergeRevisits(4.0, 60.0);
   SceneBuilder builder(&scene, scene.down);
   BuildStreetSurfaces(path, options, &builder, &scene);

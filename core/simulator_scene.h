@@ -127,6 +127,9 @@ struct SceneOptions {
   double tree_density = 0.5;      // relative number of trees, hedges and bushes (0..)
   double curb_height = 0.12;      // sidewalk height above the road (m)
   bool shadows = true;            // sun shadows cast by buildings, cars, hedges and trees
+  // The invented streets before the first and after the last pose build nothing where they run over the driven
+  // path (StreetPath::DropExtensionsOverThePath); false = simulator world versions 1-2 (core/simulator.h).
+  bool extensions_yield = true;
   Appearance appearance;          // light, colours, textures and car shapes
 };
 

@@ -53,6 +53,7 @@ void WriteSimulationYaml(const std::string& path, const StreetSimulator& simulat
   WriteText(path, [&](std::ostream& out) {
     out << std::setprecision(10);
     out << "# dvso simulate: options and world statistics of this run\n";
+    out << "world_version: " << o.world_version << "\n";
     out << "trajectory: \"" << (o.trajectory_path.empty() ? "generated" : o.trajectory_path) << "\"\n";
     out << "first_frame: " << o.first_frame << "\nnum_frames: " << summary.frames << "\nstride: " << o.stride << "\n";
     out << "seed: " << o.seed << "\n";
@@ -60,7 +61,7 @@ void WriteSimulationYaml(const std::string& path, const StreetSimulator& simulat
         << ", fx: " << o.camera.left.fx << ", fy: " << o.camera.left.fy << ", cx: " << o.camera.left.cx
         << ", cy: " << o.camera.left.cy << ", baseline: " << o.camera.baseline << "}\n";
     out << "camera_height: " << o.camera_height
-        << "\nreconcile_altitude: " << (o.reconcile_altitude ? "true" : "false") << "\nframe_interval: " << o.frame_interval
+        << "\nframe_interval: " << o.frame_interval
         << "\nmax_distance: " << o.max_distance << "\n";
     out << "exposure_drift: " << (o.exposure_drift ? "true" : "false") << "\nexposure_sigma: " << o.exposure_sigma
         << "\nexposure_max: " << o.exposure_max << "\nbias_sigma: " << o.bias_sigma << "\n";

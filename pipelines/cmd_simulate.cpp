@@ -29,7 +29,7 @@ struct SimulateArgs {
   int width = 0, height = 0;  // 0 = KITTI size
   double fx = 0, fy = 0, cx = -1, cy = -1, baseline = 0;  // 0 / -1 = KITTI (scaled with the size)
   bool no_exposure = false, no_vignetting = false, no_noise = false, no_shadows = false, no_edge_aa = false,
-       keep_altitude = false, quiet = false;
+       quiet = false;
   std::string appearance = "fixed";  // fixed | varied
   std::string raw_layout = "none";   // none | sync | extract
   std::string raw_out;               // root of the raw date folder (default OUT/kitti_raw)
@@ -56,7 +56,6 @@ void Run(SimulateArgs& args) {
   o.noise = !args.no_noise;
   o.scene.shadows = !args.no_shadows;
   o.edge_antialiasing = !args.no_edge_aa;
-  o.reconcile_altitude = !args.keep_altitude;
   o.vary_appearance = args.appearance == "varied";
   const auto given = [&](const char* option) { return args.given.count(option) > 0; };
   // The varied look draws the exposure from the seed (a given level would be silently replaced) and raises
@@ -168,10 +167,11 @@ void AddSimulateCommand(CLI::App& app) {
   cmd->add_flag("--color", o.color, "also write colour images image_2/ image_3/");
   cmd->add_flag("--no-shadows", args->no_shadows, "no cast sun shadows");
   cmd->add_flag("--no-edge-aa", args->no_edge_aa, "no extra samples on silhouette pixels (faster, aliased edges)");
-  cmd->add_flag("--keep-altitude", args->keep_altitude,
-                "use the trajectory's heights as they are; by default the altitude drift of recorded poses is "
-                "corrected where the path comes back to a place (GT poses are the corrected ones); this flag renders "
-                "the worlds of versions without that correction (docs/simulator.md)");
+  cmd->add_option("--world-version", o.world_version,
+                  "render the world of this simulator version, exactly (1: before session 38; 2: the recorded "
+                  "altitude drift corrected where the path comes back to a place, GT poses the corrected ones; 3: "
+                  "the invented streets beyond the path's ends yield to the driven path; core/simulator.h)")
+      ->capture_default_str();
   cmd->add_option("--building-density", o.scene.building_density, "fraction of the street lined by buildings")
       ->capture_default_str();
   cmd->add_option("--car-density", o.scene.car_density, "fraction of parking lanes with cars")->capture_default_str();

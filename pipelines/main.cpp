@@ -5,6 +5,7 @@
 #include <string>
 
 #include "core/error.h"
+#include "core/simulator.h"
 #include "pipelines/commands.h"
 
 namespace {
@@ -36,6 +37,9 @@ int ReportUsageError(const CLI::App& app, const CLI::ParseError& error, const st
 int main(int argc, char** argv) {
   CLI::App app{"dvso - Deep Virtual Stereo Odometry toolkit"};
   app.require_subcommand(1);
+  // The simulator's world version lets scripts that cache rendered worlds tell a stale one (core/simulator.h).
+  app.set_version_flag("--version", std::string("dvso ") + DVSO_VERSION + " (simulator world version " +
+                                        std::to_string(dvso::kSimulatorWorldVersion) + ")");
   app.set_help_all_flag("--help-all", "Show help for every subcommand");
   dvso::cli::AddDemoCommand(app);
   dvso::cli::AddSimulateCommand(app);
@@ -58,7 +62,7 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    if (e.get_exit_code() == static_cast<int>(CLI::ExitCodes::Success)) return app.exit(e);  // --help, --help-all
+    if (e.get_exit_code() == static_cast<int>(CLI::ExitCodes::Success)) return app.exit(e);  // --help, --help-all, --version
     return ReportUsageError(app, e, argc > 1 ? argv[1] : "");
   } catch (const dvso::Error& e) {
     std::cerr << "dvso: error: " << e.what() << std::endl;

@@ -29,6 +29,10 @@
 #   CAR_DETAIL=0                         `dvso simulate --car-detail` of every world (training, held-out, tb): 0 = plain
 #                                        paint, the worlds of every model before session 36 (v3, v4, smoke); -1 = the
 #                                        varied look's own share (v4c's default)
+#   WORLD_VERSION=1 (v3, v4, v4c)        `dvso simulate --world-version` of every world (core/simulator.h): these sets
+#                                        are the worlds their models were trained on, rendered again exactly; others
+#                                        (smoke) default to the binary's current version. A cached world of another
+#                                        version is an error, never silently reused.
 #                                        data paths must point into $DATA
 #   DATA=/tmp/dvso_stacknet_$WORLDS      rendered sequences and labels (~6 GB)
 #   RUN=$DATA/run_main                   checkpoints, logs, exported models, predictions
@@ -62,6 +66,10 @@ case $WORLDS in
 esac
 CONFIG=${CONFIG:-$DEFAULT_CONFIG}
 CAR_DETAIL=${CAR_DETAIL:-$([[ $WORLDS == v4c ]] && echo -1 || echo 0)}
+case $WORLDS in
+  v3 | v4 | v4c) WORLD_VERSION=${WORLD_VERSION:-1} ;;
+  *) WORLD_VERSION=${WORLD_VERSION:-} ;;  # empty: the binary's current one, asked when a world is rendered
+esac
 DATA=${DATA:-/tmp/dvso_stacknet_$WORLDS}
 RUN=${RUN:-$DATA/run_main}
 if [[ -z "${FINETUNE_CONFIG+set}" ]]; then
@@ -143,13 +151,35 @@ TB_WORLDS=("tb05 05 1000 300 9505" "tb00 00 3000 300 9701" "tb02 02 1500 300 970
 CURVE_STEP=5
 
 # Renders world `name` into $DATA/name unless complete; extra arguments go to `dvso simulate`.
+# The simulator world version a simulation.yaml records (core/simulator.h's history: version 2 wrote only
+# `reconcile_altitude: true`, version 1 neither key).
+recorded_world_version() {
+  local version
+  version=$(sed -n 's/^world_version: *\([0-9][0-9]*\).*/\1/p' "$1")
+  if [[ -z $version ]]; then
+    if grep -q '^reconcile_altitude: true' "$1"; then version=2; else version=1; fi
+  fi
+  echo "$version"
+}
+
 simulate_world() {  # name pose first count seed [simulate options...]
   local name=$1 pose=$2 first=$3 count=$4 seed=$5
   shift 5
-  [[ -f "$DATA/$name/simulation.yaml" ]] && return 0  # written after the last frame
-  log "simulate $name (KITTI $pose from pose $first, $count frames, seed $seed) $*"
+  local version=$WORLD_VERSION
+  [[ -n $version ]] || version=$("$DVSO" --version | sed -n 's/.*simulator world version \([0-9][0-9]*\).*/\1/p')
+  [[ -n $version ]] || { echo "error: $DVSO --version names no simulator world version (an older binary?)" >&2; exit 1; }
+  if [[ -f "$DATA/$name/simulation.yaml" ]]; then  # written after the last frame
+    local recorded
+    recorded=$(recorded_world_version "$DATA/$name/simulation.yaml")
+    [[ $recorded == "$version" ]] && return 0
+    echo "error: $DATA/$name is simulator world version $recorded, this run renders version $version: delete it (with" \
+      "the runs trained on it) to render it again, or set WORLD_VERSION=$recorded to use it as it is" >&2
+    exit 1
+  fi
+  log "simulate $name (KITTI $pose from pose $first, $count frames, seed $seed, world version $version) $*"
   run "$DVSO" simulate --out "$DATA/$name" --trajectory "data/kitti_poses/$pose.txt" --first "$first" --count "$count" \
-    --seed "$seed" --appearance varied --car-detail "$CAR_DETAIL" "$@" --quiet > "$DATA/$name.simulate.log"
+    --seed "$seed" --appearance varied --car-detail "$CAR_DETAIL" --world-version "$version" "$@" --quiet \
+    > "$DATA/$name.simulate.log"
 }
 
 render() {  # name pose first count seed: a training or held-out world at the network's size, colour

@@ -14,6 +14,7 @@
 
 #include "core/disparity_io.h"
 #include "core/fs_util.h"
+#include "core/simulator.h"
 #include "tests/dvso_cli_runner.h"
 #include "tests/temp_dir.h"
 
@@ -315,4 +316,33 @@ TEST(Cli, SimulateRejectsOptionsThatWouldBeOverriddenOrIgnored) {
   // as given: both act.
   const CliRun varied = RunDvso(common + " --appearance varied --camera-height 1.5 --height-jitter 0.05");
   EXPECT_EQ(varied.exit_code, 0) << varied.out;
+}
+
+// Scripts that cache rendered worlds compare the simulator's world version (`dvso --version`) with the one a
+// world's simulation.yaml records; every version stays renderable with --world-version.
+TEST(Cli, VersionNamesTheSimulatorWorldVersionThatSimulationYamlRecords) {
+  const CliRun version = RunDvso("--version");
+  EXPECT_EQ(version.exit_code, 0);
+  const std::string current = std::to_string(dvso::kSimulatorWorldVersion);
+  EXPECT_NE(version.out.find("simulator world version " + current + ")"), std::string::npos) << version.out;
+  const std::string dir = TempDir("world_version");
+  auto recorded = [&](const std::string& args) {
+    const CliRun r = RunDvso("simulate --quiet --count 1 --width 64 --height 32 --texture-size 64 --out " + dir +
+                             "/seq " + args);
+    EXPECT_EQ(r.exit_code, 0) << r.out;
+    std::ifstream yaml(dir + "/seq/simulation.yaml");
+    std::string line, value;
+    while (std::getline(yaml, line)) {
+      if (line.rfind("world_version: ", 0) == 0) value = line.substr(15);
+    }
+    std::filesystem::remove_all(dir + "/seq");
+    return value;
+  };
+  EXPECT_EQ(recorded(""), current);
+  EXPECT_EQ(recorded("--world-version 1"), "1");
+  for (const int wrong : {0, dvso::kSimulatorWorldVersion + 1}) {
+    const CliRun r = RunDvso("simulate --quiet --count 1 --out " + dir + "/seq --world-version " + std::to_string(wrong));
+    EXPECT_EQ(r.exit_code, 1) << r.out;
+    EXPECT_NE(r.out.find("--world-version must be in [1, " + current + "]"), std::string::npos) << r.out;
+  }
 }

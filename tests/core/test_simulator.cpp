@@ -380,8 +380,8 @@ TEST(Simulator, WritesKittiLayoutWithGroundTruth) {
   sim::ApplyAltitudeCorrections(sim::AltitudeCorrections(corrected, {}), &corrected);
   const Eigen::Isometry3d expected = corrected[120].inverse() * corrected[124];
   EXPECT_TRUE(poses.poses[2].T_world_camera.isApprox(expected, 1e-6));
-  // --keep-altitude: KITTI's poses as they are.
-  o.reconcile_altitude = false;
+  // --world-version 1: KITTI's poses as they are.
+  o.world_version = 1;
   const StreetSimulator raw(o);
   const Eigen::Isometry3d raw_expected = kitti.poses[120].T_world_camera.inverse() * kitti.poses[124].T_world_camera;
   EXPECT_TRUE((raw.WorldFromCamera(0).inverse() * raw.WorldFromCamera(2)).isApprox(raw_expected, 1e-6));

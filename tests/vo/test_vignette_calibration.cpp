@@ -29,9 +29,9 @@ std::string SimulatedSequence(const std::string& name, bool vignetting) {
   o.camera = StereoCamera{}.Resized(kWidth, kHeight);
   o.vignetting = vignetting;
   o.vignetting_strength = 0.3;
-  // The world the values below were measured on (rendered before the simulator corrected KITTI's altitude
-  // drift at revisits, session 38); in the corrected world the flat lens's fit at rho 0.25 is 1.0055.
-  o.reconcile_altitude = false;
+  // The world the values below were measured on (simulator world version 1, before the simulator corrected
+  // KITTI's altitude drift at revisits, session 38); in version 2's world the flat lens's fit at rho 0.25 is 1.0055.
+  o.world_version = 1;
   WriteSimulatedSequence(o, out, false);
   return out;
 }
