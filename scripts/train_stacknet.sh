@@ -23,17 +23,18 @@
 #   DVSO=build/dvso                      binary (build with scripts/build.sh)
 #   WORLDS=v4                            training worlds: v4 = 72 of 30 frames, v3 = 36 of 60 frames,
 #                                        v4c = v4's worlds with detailed car paint (session 36),
+#                                        v4c2 = v4c's as simulator world version 2 (altitude drift corrected, session 39),
 #                                        smoke = 3 of 12 frames (tests of the scripts only)
 #   CONFIG=configs/stacknet_cpu_v4_long.yaml  (the shipped model's base run; v3: configs/stacknet_cpu_main.yaml;
-#                                        v4c: configs/stacknet_cpu_v4c_long.yaml)
+#                                        v4c: configs/stacknet_cpu_v4c_long.yaml; v4c2: configs/stacknet_cpu_v4c2_long.yaml);
+#                                        its data paths must point into $DATA
 #   CAR_DETAIL=0                         `dvso simulate --car-detail` of every world (training, held-out, tb): 0 = plain
 #                                        paint, the worlds of every model before session 36 (v3, v4, smoke); -1 = the
 #                                        varied look's own share (v4c's default)
-#   WORLD_VERSION=1 (v3, v4, v4c)        `dvso simulate --world-version` of every world (core/simulator.h): these sets
+#   WORLD_VERSION=1 (v3, v4, v4c), 2 (v4c2)  `dvso simulate --world-version` of every world (core/simulator.h): these sets
 #                                        are the worlds their models were trained on, rendered again exactly; others
 #                                        (smoke) default to the binary's current version. A cached world of another
 #                                        version is an error, never silently reused.
-#                                        data paths must point into $DATA
 #   DATA=/tmp/dvso_stacknet_$WORLDS      rendered sequences and labels (~6 GB)
 #   RUN=$DATA/run_main                   checkpoints, logs, exported models, predictions
 #   FINETUNE_CONFIG=configs/stacknet_cpu_v4_finetune_640.yaml  second training from the base run's export
@@ -59,15 +60,18 @@ WORLDS=${WORLDS:-v4}
 # configs/stacknet_cpu_v4_finetune_640.yaml (the finetune step), with b_v from the tb step.
 SHIPPED_CONFIG=configs/stacknet_cpu_v4_long.yaml
 V4C_CONFIG=configs/stacknet_cpu_v4c_long.yaml
+V4C2_CONFIG=configs/stacknet_cpu_v4c2_long.yaml
 case $WORLDS in
   v4) DEFAULT_CONFIG=$SHIPPED_CONFIG ;;
   v4c) DEFAULT_CONFIG=$V4C_CONFIG ;;
+  v4c2) DEFAULT_CONFIG=$V4C2_CONFIG ;;
   *) DEFAULT_CONFIG=configs/stacknet_cpu_main.yaml ;;
 esac
 CONFIG=${CONFIG:-$DEFAULT_CONFIG}
-CAR_DETAIL=${CAR_DETAIL:-$([[ $WORLDS == v4c ]] && echo -1 || echo 0)}
+CAR_DETAIL=${CAR_DETAIL:-$([[ $WORLDS == v4c* ]] && echo -1 || echo 0)}
 case $WORLDS in
   v3 | v4 | v4c) WORLD_VERSION=${WORLD_VERSION:-1} ;;
+  v4c2) WORLD_VERSION=${WORLD_VERSION:-2} ;;
   *) WORLD_VERSION=${WORLD_VERSION:-} ;;  # empty: the binary's current one, asked when a world is rendered
 esac
 DATA=${DATA:-/tmp/dvso_stacknet_$WORLDS}
@@ -76,6 +80,7 @@ if [[ -z "${FINETUNE_CONFIG+set}" ]]; then
   case $CONFIG in
     "$SHIPPED_CONFIG") FINETUNE_CONFIG=configs/stacknet_cpu_v4_finetune_640.yaml ;;
     "$V4C_CONFIG") FINETUNE_CONFIG=configs/stacknet_cpu_v4c_finetune_640.yaml ;;
+    "$V4C2_CONFIG") FINETUNE_CONFIG=configs/stacknet_cpu_v4c2_finetune_640.yaml ;;
     *) FINETUNE_CONFIG="" ;;
   esac
 fi
@@ -116,7 +121,7 @@ TRAIN_SEGMENTS=(
 # (72 of 30 frames, seeds 401-472, worlds per trajectory ~ its length, evenly spaced along it), to test
 # whether more looks beat more frames per look. Measured: they do not (held-out abs rel 0.2501 vs 0.2422
 # for v3, docs/stacknet.md), so v3 stays the shipped model's data.
-if [[ $WORLDS == v4 || $WORLDS == v4c ]]; then
+if [[ $WORLDS == v4 || $WORLDS == v4c || $WORLDS == v4c2 ]]; then
   mapfile -t TRAIN_SEGMENTS < <(python3 - <<'EOF'
 lengths = {"00": 4541, "01": 1101, "02": 4661, "03": 801, "04": 271, "05": 2761, "06": 1101, "07": 1101}
 worlds, frames, total = 72, 30, sum(lengths.values())
