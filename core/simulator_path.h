@@ -71,8 +71,9 @@ class StreetPath {
   // (a loop: KITTI 06's street before its start runs through its frames 750-790, 00's after its end
   // through its start), its samples are marked merged into that sample and build nothing. Else
   // they were laid at the first or last pose's height through the driven street, and a later pass
-  // merged into them drove with the camera up to 0.7 m below its height above the road. Call
-  // before MergeRevisits.
+  // merged into them drove with the camera up to 0.7 m below its height above the road. Whatever
+  // the two streets' directions or heights (a crossing, a bridge): an invented street never
+  // outranks a driven one. Call before MergeRevisits.
   void DropExtensionsOverThePath(double radius, double min_gap);
 
   // Vertical clearance (m) between an object and a street at another level:

@@ -30,11 +30,12 @@
 #                                        its data paths must point into $DATA
 #   CAR_DETAIL=0                         `dvso simulate --car-detail` of every world (training, held-out, tb): 0 = plain
 #                                        paint, the worlds of every model before session 36 (v3, v4, smoke); -1 = the
-#                                        varied look's own share (v4c's default)
+#                                        varied look's own share (the default of v4c and v4c2)
 #   WORLD_VERSION=1 (v3, v4, v4c), 2 (v4c2)  `dvso simulate --world-version` of every world (core/simulator.h): these sets
 #                                        are the worlds their models were trained on, rendered again exactly; others
 #                                        (smoke) default to the binary's current version. A cached world of another
-#                                        version is an error, never silently reused.
+#                                        version is an error in every step that renders or reads worlds (smoke: it
+#                                        is rendered again). Needs a dvso built since session 39 (--world-version).
 #   DATA=/tmp/dvso_stacknet_$WORLDS      rendered sequences and labels (~6 GB)
 #   RUN=$DATA/run_main                   checkpoints, logs, exported models, predictions
 #   FINETUNE_CONFIG=configs/stacknet_cpu_v4_finetune_640.yaml  second training from the base run's export
@@ -155,9 +156,9 @@ TB_WORLDS=("tb05 05 1000 300 9505" "tb00 00 3000 300 9701" "tb02 02 1500 300 970
 # Frames of each held-out segment used for the per-epoch curve (every 5th: 90 frames).
 CURVE_STEP=5
 
-# Renders world `name` into $DATA/name unless complete; extra arguments go to `dvso simulate`.
 # The simulator world version a simulation.yaml records (core/simulator.h's history: version 2 wrote only
-# `reconcile_altitude: true`, version 1 neither key).
+# `reconcile_altitude: true`, version 1 neither key). Not told apart: worlds rendered by the transient commits
+# 9d74e92-550d2c5 and a52f8fc-9dab4e5 of sessions 38-39 (read as 2 but with version 3's invented streets).
 recorded_world_version() {
   local version
   version=$(sed -n 's/^world_version: *\([0-9][0-9]*\).*/\1/p' "$1")
@@ -167,20 +168,51 @@ recorded_world_version() {
   echo "$version"
 }
 
+# The world version this run renders: $WORLD_VERSION, else the binary's current one.
+wanted_world_version() {
+  local version=$WORLD_VERSION
+  if [[ -z $version ]]; then
+    version=$({ "$DVSO" --version 2> /dev/null || true; } | sed -n 's/.*simulator world version \([0-9][0-9]*\).*/\1/p')
+  fi
+  [[ -n $version ]] || { echo "error: $DVSO --version names no simulator world version (built before session 39?)" >&2; exit 1; }
+  echo "$version"
+}
+
+# Returns 0 when world `name` is complete and the wanted version, 1 when it is absent; a complete world of another
+# version is an error (training on it would mix worlds), except for WORLDS=smoke, whose worlds only test this script
+# and are rendered again.
+cached_world_is_current() {  # name version
+  local yaml="$DATA/$1/simulation.yaml"  # written after the last frame
+  [[ -f $yaml ]] || return 1
+  local recorded
+  recorded=$(recorded_world_version "$yaml")
+  [[ $recorded == "$2" ]] && return 0
+  if [[ $WORLDS == smoke ]]; then
+    rm -rf "${DATA:?}/$1"
+    return 1
+  fi
+  echo "error: $DATA/$1 is simulator world version $recorded, this run wants version $2: delete it (with the runs" \
+    "trained on it) to render it again, or set WORLD_VERSION=$recorded to use it as it is" >&2
+  exit 1
+}
+
+# Every cached world of the set must be the wanted version before a step reads them (train, finetune, eval).
+check_cached_worlds() {
+  local version spec
+  version=$(wanted_world_version)
+  for spec in "${TEST_SEGMENTS[@]}" "${TRAIN_SEGMENTS[@]}"; do
+    set -- $spec
+    cached_world_is_current "$1" "$version" || true
+  done
+}
+
+# Renders world `name` into $DATA/name unless complete; extra arguments go to `dvso simulate`.
 simulate_world() {  # name pose first count seed [simulate options...]
   local name=$1 pose=$2 first=$3 count=$4 seed=$5
   shift 5
-  local version=$WORLD_VERSION
-  [[ -n $version ]] || version=$("$DVSO" --version | sed -n 's/.*simulator world version \([0-9][0-9]*\).*/\1/p')
-  [[ -n $version ]] || { echo "error: $DVSO --version names no simulator world version (an older binary?)" >&2; exit 1; }
-  if [[ -f "$DATA/$name/simulation.yaml" ]]; then  # written after the last frame
-    local recorded
-    recorded=$(recorded_world_version "$DATA/$name/simulation.yaml")
-    [[ $recorded == "$version" ]] && return 0
-    echo "error: $DATA/$name is simulator world version $recorded, this run renders version $version: delete it (with" \
-      "the runs trained on it) to render it again, or set WORLD_VERSION=$recorded to use it as it is" >&2
-    exit 1
-  fi
+  local version
+  version=$(wanted_world_version)
+  cached_world_is_current "$name" "$version" && return 0
   log "simulate $name (KITTI $pose from pose $first, $count frames, seed $seed, world version $version) $*"
   run "$DVSO" simulate --out "$DATA/$name" --trajectory "data/kitti_poses/$pose.txt" --first "$first" --count "$count" \
     --seed "$seed" --appearance varied --car-detail "$CAR_DETAIL" --world-version "$version" "$@" --quiet \
@@ -311,6 +343,7 @@ curve_monitor() {
 step_train() {
   mkdir -p "$RUN"
   if [[ -f "$RUN/checkpoint_final.pt" ]]; then log "training $RUN already finished"; return 0; fi
+  check_cached_worlds
   local resume=()
   [[ -f "$RUN/checkpoint_last.pt" ]] && resume=(--resume)
   [[ -n "${INIT_FROM:-}" ]] && resume+=(--init-from "$INIT_FROM")  # ignored by train when resuming
@@ -377,6 +410,7 @@ step_tb() {
 
 step_eval() {
   local RUN=$FINAL_RUN  # evaluate the final models (the fine-tune's when there is one)
+  check_cached_worlds
   mkdir -p "$DOCS"  # the only step that writes there
   local results=()
   for net in simplenet stacknet; do

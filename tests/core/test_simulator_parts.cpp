@@ -146,8 +146,9 @@ TEST(SimulatorPath, DrivingBackAlongTheSameStreetIsMerged) {
 }
 
 TEST(SimulatorPath, InventedStreetsBeyondTheEndsYieldToTheDrivenPath) {
-  // 100 m along +z from the origin, then around: left to x = -100, back to z = -100, and across to
-  // x = +100, 1 m lower (y down), crossing the street the path adds straight behind its start (x = 0, z < 0).
+  // 100 m along +z from the origin, then around: left to x = -100, back to z = -100, across to x = 0, 1 m
+  // lower (y down), and down the street the path adds straight behind its start (x = 0, z < 0) to z = -250:
+  // without the fix that last leg is merged into the invented street (laid at the start's height).
   std::vector<Eigen::Isometry3d> poses;
   auto leg = [&](const Eigen::Vector3d& from, const Eigen::Vector3d& to, double y) {
     const Eigen::Vector3d dir = (to - from).normalized();
@@ -163,7 +164,8 @@ TEST(SimulatorPath, InventedStreetsBeyondTheEndsYieldToTheDrivenPath) {
   leg({0, 0, 0}, {0, 0, 100}, 0.0);
   leg({0, 0, 100}, {-100, 0, 100}, 0.0);
   leg({-100, 0, 100}, {-100, 0, -100}, 0.0);
-  leg({-100, 0, -100}, {100, 0, -100}, 1.0);
+  leg({-100, 0, -100}, {0, 0, -100}, 1.0);
+  leg({0, 0, -100}, {0, 0, -250}, 1.0);
   StreetPath path(poses, 1.65, 2.0, 300.0);
   path.DropExtensionsOverThePath(12.0, 60.0);
   path.MergeRevisits(4.0, 60.0);
@@ -173,7 +175,7 @@ TEST(SimulatorPath, InventedStreetsBeyondTheEndsYieldToTheDrivenPath) {
     const bool extension = sample.s < 0 || sample.s > total;
     if (extension && sample.merged_into >= 0) {
       ++dropped;
-      // Only where the driven path is near: the crossing at z = -100 (x = 0) or the last leg's end.
+      // Only where the driven path is near: along the last leg (x = 0, z = -88 to -262).
       const PathSample& onto = path.samples()[sample.merged_into];
       EXPECT_LT((sample.road - onto.road).cwiseProduct(Eigen::Vector3d(1, 0, 1)).norm(), 12.0);
     }
@@ -182,7 +184,8 @@ TEST(SimulatorPath, InventedStreetsBeyondTheEndsYieldToTheDrivenPath) {
       onto_extension += onto.s < 0 || onto.s > total;
     }
   }
-  EXPECT_GE(dropped, 10);  // ~24 m of the pre-start street across the last leg
+  std::printf("invented samples dropped %d, driven samples merged into invented ones %d\n", dropped, onto_extension);
+  EXPECT_GE(dropped, 80);  // ~175 m of the pre-start street under the last legs, every 2 m
   EXPECT_EQ(onto_extension, 0);
   // The pre-start street right behind the start (within 60 m of path) stays.
   EXPECT_LT(path.samples()[path.SampleAt(-10.0)].merged_into, 0);
