@@ -22,8 +22,9 @@ COUNT="${COUNT:-150}"
 WORLDS="${WORLDS:-fixed:08:1000:9601 varied:08:2000:9602 varied:09:300:9603 varied:10:300:9604 varied:00:2000:9605 varied:05:500:9606}"
 read -r -a LABEL_EXTRA <<< "${LABEL_ARGS:-}"
 [[ -x "$DVSO" ]] || { echo "error: $DVSO not built (scripts/build.sh, or set DVSO=path/to/dvso)" >&2; exit 1; }
-WORLD_VERSION="${WORLD_VERSION:-$("$DVSO" --version | sed -n 's/.*simulator world version \([0-9][0-9]*\).*/\1/p')}"
-[[ -n "$WORLD_VERSION" ]] || { echo "error: $DVSO --version names no simulator world version (an older binary?)" >&2; exit 1; }
+# shellcheck source=../scripts/world_version.sh
+source "$REPO/scripts/world_version.sh"
+WORLD_VERSION="${WORLD_VERSION:-$(binary_world_version "$DVSO")}"
 mkdir -p "$OUT"
 
 for world in $WORLDS; do
@@ -35,7 +36,7 @@ for world in $WORLDS; do
   seq="$OUT/$name"
   # A world cached by an earlier run is reused only when it is the simulator world version (core/simulator.h)
   # this run renders; else it is rendered again (its labels would measure another world).
-  if [[ -f "$seq/simulation.yaml" ]] && ! grep -qx "world_version: $WORLD_VERSION" "$seq/simulation.yaml"; then
+  if [[ -f "$seq/simulation.yaml" && $(recorded_world_version "$seq/simulation.yaml") != "$WORLD_VERSION" ]]; then
     echo "[$(date -u +%H:%M:%S)] $name: cached world is not world version $WORLD_VERSION, rendering it again"
     rm -rf "$seq"
   fi

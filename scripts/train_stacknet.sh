@@ -55,6 +55,8 @@
 set -euo pipefail
 cd "${REPO:-$(dirname "$0")/..}"
 STEP=${1:-all}
+# shellcheck source=world_version.sh
+source scripts/world_version.sh
 DVSO=${DVSO:-build/dvso}
 WORLDS=${WORLDS:-v4}
 # The shipped models/stacknet_cpu_main.pt (session 13) is this config's run (session 9) fine-tuned at 640x192 by
@@ -156,26 +158,9 @@ TB_WORLDS=("tb05 05 1000 300 9505" "tb00 00 3000 300 9701" "tb02 02 1500 300 970
 # Frames of each held-out segment used for the per-epoch curve (every 5th: 90 frames).
 CURVE_STEP=5
 
-# The simulator world version a simulation.yaml records (core/simulator.h's history: version 2 wrote only
-# `reconcile_altitude: true`, version 1 neither key). Not told apart: worlds rendered by the transient commits
-# 9d74e92-550d2c5 and a52f8fc-9dab4e5 of sessions 38-39 (read as 2 but with version 3's invented streets).
-recorded_world_version() {
-  local version
-  version=$(sed -n 's/^world_version: *\([0-9][0-9]*\).*/\1/p' "$1")
-  if [[ -z $version ]]; then
-    if grep -q '^reconcile_altitude: true' "$1"; then version=2; else version=1; fi
-  fi
-  echo "$version"
-}
-
 # The world version this run renders: $WORLD_VERSION, else the binary's current one.
 wanted_world_version() {
-  local version=$WORLD_VERSION
-  if [[ -z $version ]]; then
-    version=$({ "$DVSO" --version 2> /dev/null || true; } | sed -n 's/.*simulator world version \([0-9][0-9]*\).*/\1/p')
-  fi
-  [[ -n $version ]] || { echo "error: $DVSO --version names no simulator world version (built before session 39?)" >&2; exit 1; }
-  echo "$version"
+  if [[ -n $WORLD_VERSION ]]; then echo "$WORLD_VERSION"; else binary_world_version "$DVSO" || exit 1; fi
 }
 
 # Returns 0 when world `name` is complete and the wanted version, 1 when it is absent; a complete world of another
