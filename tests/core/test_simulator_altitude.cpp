@@ -36,17 +36,24 @@ double HeightAboveRoad(const cv::Mat& depth, const PinholeCamera& camera) {
   return std::abs(normal.dot(mean));
 }
 
-TEST(Simulator, RevisitCameraStaysAtItsHeightAboveTheRoad) {
+// Small, fast frames along KITTI sequence `kitti` (no noise, shadows or edge anti-aliasing: only the geometry matters).
+SimulatorOptions SmallKittiOptions(const std::string& kitti, int first, int frames, int stride) {
   SimulatorOptions o;
-  o.trajectory_path = std::string(DVSO_TEST_DATA_DIR) + "/kitti_poses/02.txt";
-  o.first_frame = 4535;  // KITTI 02 here revisits streets of an earlier pass recorded ~2 m lower
-  o.num_frames = 2;
-  o.stride = 15;
+  o.trajectory_path = std::string(DVSO_TEST_DATA_DIR) + "/kitti_poses/" + kitti + ".txt";
+  o.first_frame = first;
+  o.num_frames = frames;
+  o.stride = stride;
   o.camera = StereoCamera{}.Resized(310, 94);
   o.texture_size = 64;
   o.noise = false;
   o.edge_antialiasing = false;
   o.scene.shadows = false;
+  return o;
+}
+
+TEST(Simulator, RevisitCameraStaysAtItsHeightAboveTheRoad) {
+  // KITTI 02 from 4535 revisits streets of an earlier pass recorded ~2 m lower.
+  SimulatorOptions o = SmallKittiOptions("02", 4535, 2, 15);
   for (const bool reconcile : {true, false}) {
     o.world_version = reconcile ? kSimulatorWorldVersion : 1;
     const StreetSimulator simulator(o);
@@ -65,16 +72,7 @@ TEST(Simulator, LoopCameraStaysAtItsHeightWhereAnInventedStreetRanOverThePath) {
   // KITTI 06 is a loop: the 300 m of straight street invented before its first pose run through its frames
   // 750-790. From world version 3 they yield to the driven path; in versions 1-2 the later pass was merged into
   // that street, laid at the start's height, and the camera rode too low above it.
-  SimulatorOptions o;
-  o.trajectory_path = std::string(DVSO_TEST_DATA_DIR) + "/kitti_poses/06.txt";
-  o.first_frame = 755;
-  o.num_frames = 3;
-  o.stride = 10;
-  o.camera = StereoCamera{}.Resized(310, 94);
-  o.texture_size = 64;
-  o.noise = false;
-  o.edge_antialiasing = false;
-  o.scene.shadows = false;
+  SimulatorOptions o = SmallKittiOptions("06", 755, 3, 10);
   for (const int version : {1, 2, 3}) {
     o.world_version = version;
     const StreetSimulator simulator(o);
