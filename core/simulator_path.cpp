@@ -13,11 +13,6 @@
 namespace dvso::sim {
 namespace {
 
-// Hash key of a 2D grid cell (no signed shifts: cells can be negative).
-int64_t CellKey(int a, int b) {
-  return static_cast<int64_t>((static_cast<uint64_t>(static_cast<uint32_t>(a)) << 32) | static_cast<uint32_t>(b));
-}
-
 // The camera centres split along `down`: heights, horizontal positions and horizontal arc lengths.
 struct CameraTrack {
   std::vector<double> height, s;
@@ -41,14 +36,28 @@ CameraTrack TrackOf(const std::vector<Eigen::Isometry3d>& poses, const Eigen::Ve
 
 }  // namespace
 
+HorizontalGrid::HorizontalGrid(const Eigen::Vector3d& down, double cell_size)
+    : axis_a_(down.unitOrthogonal()), axis_b_(down.cross(axis_a_)), cell_size_(cell_size) {
+  Require(cell_size > 0, "horizontal grid: the cell size must be > 0");
+}
+
+std::pair<int, int> HorizontalGrid::CellOf(const Eigen::Vector3d& q) const {
+  return {static_cast<int>(std::floor(q.dot(axis_a_) / cell_size_)),
+          static_cast<int>(std::floor(q.dot(axis_b_) / cell_size_))};
+}
+
+void HorizontalGrid::Insert(const Eigen::Vector3d& q, int index) {
+  const std::pair<int, int> cell = CellOf(q);
+  cells_[Key(cell.first, cell.second)].push_back(index);
+}
+
 StreetPath::StreetPath(const std::vector<Eigen::Isometry3d>& poses, double camera_height, double spacing,
                        double extension)
     : spacing_(spacing) {
   Require(!poses.empty(), "the simulator needs at least one pose");
   Require(spacing > 0.1, "path sample spacing must be > 0.1 m");
   down_ = TrajectoryDown(poses);
-  axis_a_ = down_.unitOrthogonal();
-  axis_b_ = down_.cross(axis_a_);
+  grid_ = HorizontalGrid(down_, kGridCellSize);
 
   // Horizontal positions, heights and arc lengths of the camera centres.
   const int n = static_cast<int>(poses.size());
@@ -115,21 +124,13 @@ StreetPath::StreetPath(const std::vector<Eigen::Isometry3d>& poses, double camer
     sample.tangent = d.norm() > 1e-9 ? d.normalized() : dir_begin;
     sample.right = down_.cross(sample.tangent).normalized();
   }
-  for (int j = 0; j < count; ++j) {
-    const auto cell = Cell(samples_[j].road);
-    grid_[CellKey(cell.first, cell.second)].push_back(j);
-  }
+  for (int j = 0; j < count; ++j) grid_.Insert(samples_[j].road, j);
 }
 
 int StreetPath::SampleAt(double s) const {
   const double first = samples_.front().s;
   const int j = static_cast<int>(std::lround((s - first) / spacing_));
   return std::clamp(j, 0, static_cast<int>(samples_.size()) - 1);
-}
-
-std::pair<int, int> StreetPath::Cell(const Eigen::Vector3d& q) const {
-  return {static_cast<int>(std::floor(q.dot(axis_a_) / cell_size_)),
-          static_cast<int>(std::floor(q.dot(axis_b_) / cell_size_))};
 }
 
 bool StreetPath::InZone(const Eigen::Vector3d& q, Zone zone, double margin, double object_height) const {
@@ -143,89 +144,71 @@ bool StreetPath::InZoneOfOtherSamples(const Eigen::Vector3d& q, Zone zone, doubl
 
 bool StreetPath::AnySampleZoneContains(const Eigen::Vector3d& q, Zone zone, double margin, int ignore_begin,
                                        int ignore_end, double object_height) const {
-  const auto cell = Cell(q);
-  for (int da = -1; da <= 1; ++da)
-    for (int db = -1; db <= 1; ++db) {
-      const int64_t key = CellKey(cell.first + da, cell.second + db);
-      const auto it = grid_.find(key);
-      if (it == grid_.end()) continue;
-      for (int j : it->second) {
-        if (j >= ignore_begin && j < ignore_end) continue;
-        const PathSample& sample = samples_[j];
-        if (sample.merged_into >= 0 && zone != Zone::kLane) continue;
-        const Eigen::Vector3d d = q - sample.road;
-        // Height of q above this sample's road; the object spans [above, above + object_height].
-        const double above = -d.dot(down_);
-        if (above > kLevelClearance || above + object_height < -kLevelClearance) continue;  // over- or underpass
-        if (std::abs(d.dot(sample.tangent)) > 0.75 * spacing_ + 0.1) continue;
-        const double lateral = d.dot(sample.right);
-        const StreetProfile& p = sample.profile;
-        double lo = -1.6, hi = 1.6;
-        if (zone == Zone::kRoad) {
-          lo = p.left_edge;
-          hi = p.right_edge;
-        } else if (zone == Zone::kStreet) {
-          lo = p.left_edge - p.sidewalk_left;
-          hi = p.right_edge + p.sidewalk_right;
-        }
-        if (lateral > lo - margin && lateral < hi + margin) return true;
-      }
+  return grid_.AnyNear(q, [&](int j) {
+    if (j >= ignore_begin && j < ignore_end) return false;
+    const PathSample& sample = samples_[j];
+    if (sample.merged_into >= 0 && zone != Zone::kLane) return false;
+    const Eigen::Vector3d d = q - sample.road;
+    // Height of q above this sample's road; the object spans [above, above + object_height].
+    const double above = -d.dot(down_);
+    if (above > kLevelClearance || above + object_height < -kLevelClearance) return false;  // over- or underpass
+    if (std::abs(d.dot(sample.tangent)) > 0.75 * spacing_ + 0.1) return false;
+    const double lateral = d.dot(sample.right);
+    const StreetProfile& p = sample.profile;
+    double lo = -1.6, hi = 1.6;
+    if (zone == Zone::kRoad) {
+      lo = p.left_edge;
+      hi = p.right_edge;
+    } else if (zone == Zone::kStreet) {
+      lo = p.left_edge - p.sidewalk_left;
+      hi = p.right_edge + p.sidewalk_right;
     }
-  return false;
+    return lateral > lo - margin && lateral < hi + margin;
+  });
 }
 
 void StreetPath::DropExtensionsOverThePath(double radius, double min_gap) {
+  Require(radius > 0 && radius <= grid_.cell_size(), "invented streets: the yield radius must be in (0, 12] m");
   const double total = pose_s_.back();
-  const int reach = static_cast<int>(std::ceil(radius / cell_size_));
   for (PathSample& e : samples_) {
     if (e.s >= 0 && e.s <= total) continue;  // a sample of the driven path
-    const auto cell = Cell(e.road);
     int nearest = -1;
     double nearest_distance = radius;
-    for (int da = -reach; da <= reach; ++da)
-      for (int db = -reach; db <= reach; ++db) {
-        const auto it = grid_.find(CellKey(cell.first + da, cell.second + db));
-        if (it == grid_.end()) continue;
-        for (int i : it->second) {
-          const PathSample& r = samples_[i];
-          if (r.s < 0 || r.s > total || std::abs(r.s - e.s) < min_gap) continue;
-          const Eigen::Vector3d d = r.road - e.road;
-          const double distance = (d - d.dot(down_) * down_).norm();
-          if (distance < nearest_distance) {
-            nearest_distance = distance;
-            nearest = i;
-          }
-        }
+    grid_.AnyNear(e.road, [&](int i) {
+      const PathSample& r = samples_[i];
+      if (r.s < 0 || r.s > total || std::abs(r.s - e.s) < min_gap) return false;
+      const Eigen::Vector3d d = r.road - e.road;
+      const double distance = (d - d.dot(down_) * down_).norm();
+      if (distance < nearest_distance) {
+        nearest_distance = distance;
+        nearest = i;
       }
+      return false;
+    });
     if (nearest >= 0) e.merged_into = nearest;
   }
 }
 
 void StreetPath::MergeRevisits(double radius, double min_gap) {
+  Require(radius > 0 && radius <= grid_.cell_size(), "revisits: the merge radius must be in (0, 12] m");
   const int n = static_cast<int>(samples_.size());
   for (int j = 0; j < n; ++j) {
     PathSample& b = samples_[j];
     if (b.merged_into >= 0) continue;  // a dropped extension (DropExtensionsOverThePath)
-    const auto cell = Cell(b.road);
     int best = -1;
     double best_distance = radius;
-    for (int da = -1; da <= 1; ++da)
-      for (int db = -1; db <= 1; ++db) {
-        const int64_t key = CellKey(cell.first + da, cell.second + db);
-        const auto it = grid_.find(key);
-        if (it == grid_.end()) continue;
-        for (int i : it->second) {
-          const PathSample& a = samples_[i];
-          if (i >= j || b.s - a.s < min_gap || a.merged_into >= 0) continue;
-          const Eigen::Vector3d d = b.road - a.road;
-          if (std::abs(d.dot(down_)) > 2.0 || std::abs(a.tangent.dot(b.tangent)) < 0.85) continue;
-          const double distance = (d - d.dot(down_) * down_).norm();
-          if (distance < best_distance) {
-            best_distance = distance;
-            best = i;
-          }
-        }
+    grid_.AnyNear(b.road, [&](int i) {
+      const PathSample& a = samples_[i];
+      if (i >= j || b.s - a.s < min_gap || a.merged_into >= 0) return false;
+      const Eigen::Vector3d d = b.road - a.road;
+      if (std::abs(d.dot(down_)) > 2.0 || std::abs(a.tangent.dot(b.tangent)) < 0.85) return false;
+      const double distance = (d - d.dot(down_) * down_).norm();
+      if (distance < best_distance) {
+        best_distance = distance;
+        best = i;
       }
+      return false;
+    });
     if (best < 0) continue;
     b.merged_into = best;
     // Widen the earlier street so that the revisit's lane (+-2 m) is road.
@@ -292,42 +275,29 @@ std::vector<AltitudeCorrection> AltitudeCorrections(const std::vector<Eigen::Iso
     sample_flat[k] = flat[i] + t * (flat[i + 1] - flat[i]);
     sample_height[k] = height[i] + t * (height[i + 1] - height[i]);
   }
-  // Pairs of samples on the same street from different passes (spatial hash of cell = radius).
-  const Eigen::Vector3d axis_a = down.unitOrthogonal(), axis_b = down.cross(axis_a);
-  auto cell_of = [&](const Eigen::Vector3d& q) {
-    return std::make_pair(static_cast<int>(std::floor(q.dot(axis_a) / options.radius)),
-                          static_cast<int>(std::floor(q.dot(axis_b) / options.radius)));
-  };
-  std::unordered_map<int64_t, std::vector<int>> grid;
-  for (int k = 0; k < n; ++k) {
-    const auto cell = cell_of(sample_flat[k]);
-    grid[CellKey(cell.first, cell.second)].push_back(k);
-  }
+  // Pairs of samples on the same street from different passes (grid cell = radius).
+  HorizontalGrid grid(down, options.radius);
+  for (int k = 0; k < n; ++k) grid.Insert(sample_flat[k], k);
   std::vector<Eigen::Triplet<double>> normal;  // normal equations A^T A (summed by setFromTriplets)
   Eigen::VectorXd rhs = Eigen::VectorXd::Zero(n);
   int pairs = 0;
   for (int k = 0; k < n; ++k) {
-    const auto cell = cell_of(sample_flat[k]);
-    for (int da = -1; da <= 1; ++da)
-      for (int db = -1; db <= 1; ++db) {
-        const auto it = grid.find(CellKey(cell.first + da, cell.second + db));
-        if (it == grid.end()) continue;
-        for (int l : it->second) {
-          if ((l - k) * options.spacing <= options.min_gap) continue;  // also skips l <= k
-          const double distance = (sample_flat[l] - sample_flat[k]).norm();
-          const double difference = sample_height[k] - sample_height[l];
-          if (distance >= options.radius || std::abs(difference) > options.max_difference) continue;
-          // Residual h_k + c_k - h_l - c_l with weight w.
-          const double w = 1.0 - distance / options.radius;
-          normal.emplace_back(k, k, w);
-          normal.emplace_back(l, l, w);
-          normal.emplace_back(k, l, -w);
-          normal.emplace_back(l, k, -w);
-          rhs[k] -= w * difference;
-          rhs[l] += w * difference;
-          ++pairs;
-        }
-      }
+    grid.AnyNear(sample_flat[k], [&](int l) {
+      if ((l - k) * options.spacing <= options.min_gap) return false;  // also skips l <= k
+      const double distance = (sample_flat[l] - sample_flat[k]).norm();
+      const double difference = sample_height[k] - sample_height[l];
+      if (distance >= options.radius || std::abs(difference) > options.max_difference) return false;
+      // Residual h_k + c_k - h_l - c_l with weight w.
+      const double w = 1.0 - distance / options.radius;
+      normal.emplace_back(k, k, w);
+      normal.emplace_back(l, l, w);
+      normal.emplace_back(k, l, -w);
+      normal.emplace_back(l, k, -w);
+      rhs[k] -= w * difference;
+      rhs[l] += w * difference;
+      ++pairs;
+      return false;
+    });
   }
   if (pairs == 0) return corrections;
   // Smoothness: second differences c_{k-1} - 2 c_k + c_{k+1}; a small pull to 0 fixes the

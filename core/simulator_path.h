@@ -9,6 +9,7 @@
 #include <Eigen/Geometry>
 #include <cstdint>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 namespace dvso::sim {
@@ -45,6 +46,52 @@ enum class Zone {
   kStreet,  // road or sidewalk of some street
 };
 
+// Point indices bucketed by horizontal position (the plane across `down`) in square cells of
+// `cell_size` m: the one neighbour search of the street path and of the altitude pairs.
+class HorizontalGrid {
+ public:
+  HorizontalGrid() = default;
+  HorizontalGrid(const Eigen::Vector3d& down, double cell_size);
+  void Insert(const Eigen::Vector3d& q, int index);
+  double cell_size() const { return cell_size_; }
+  // Calls visit(index) for the points of q's cell and of the eight around it, in a fixed order
+  // (cells, then insertion), until visit returns true; returns whether one did. Every point within
+  // cell_size of q horizontally is visited (and some farther ones: callers test the distance).
+  template <typename Visit>
+  bool AnyNear(const Eigen::Vector3d& q, Visit&& visit) const {
+    const std::pair<int, int> cell = CellOf(q);
+    for (int da = -1; da <= 1; ++da)
+      for (int db = -1; db <= 1; ++db) {
+        const auto it = cells_.find(Key(cell.first + da, cell.second + db));
+        if (it == cells_.end()) continue;
+        for (int index : it->second)
+          if (visit(index)) return true;
+      }
+    return false;
+  }
+
+ private:
+  std::pair<int, int> CellOf(const Eigen::Vector3d& q) const;
+  // Hash key of a cell (no signed shifts: cells can be negative).
+  static int64_t Key(int a, int b) {
+    return static_cast<int64_t>((static_cast<uint64_t>(static_cast<uint32_t>(a)) << 32) | static_cast<uint32_t>(b));
+  }
+  Eigen::Vector3d axis_a_ = Eigen::Vector3d::UnitX(), axis_b_ = Eigen::Vector3d::UnitZ();  // horizontal basis
+  double cell_size_ = 1.0;
+  std::unordered_map<int64_t, std::vector<int>> cells_;
+};
+
+// m of arc length: path samples at least this far apart along the path are different passes of
+// one place (a loop, a revisit, a crossing); closer ones belong to the same pass.
+constexpr double kRevisitMinArcGap = 60.0;
+// m: a sample within this of an earlier pass (horizontally, driving parallel or anti-parallel)
+// drives on that pass's street (StreetPath::MergeRevisits): its lane, +-2 m, fits on that road.
+constexpr double kRevisitMergeRadius = 4.0;
+// m: an invented street beyond the path's ends yields where it comes this close to the driven
+// path (StreetPath::DropExtensionsOverThePath): a road and its sidewalks, as far as the altitude
+// reconciliation's radius (AltitudeReconciliationOptions::radius) counts two passes as one street.
+constexpr double kExtensionYieldRadius = 12.0;
+
 class StreetPath {
  public:
   // poses: camera-to-world of every frame of the trajectory (KITTI convention:
@@ -65,6 +112,7 @@ class StreetPath {
   // Marks revisits (samples within `radius` m of an earlier sample at least
   // `min_gap` m of arc length before, driving parallel or anti-parallel) as
   // merged and widens the earlier sample's road to contain their lane.
+  // radius <= 12 m (the grid's cell).
   void MergeRevisits(double radius, double min_gap);
   // The straight streets added before the first and after the last pose are invented: where one
   // runs within `radius` m of a sample of the driven path at least `min_gap` m of arc length away
@@ -73,7 +121,7 @@ class StreetPath {
   // they were laid at the first or last pose's height through the driven street, and a later pass
   // merged into them drove with the camera up to 0.7 m below its height above the road. Whatever
   // the two streets' directions or heights (a crossing, a bridge): an invented street never
-  // outranks a driven one. Call before MergeRevisits.
+  // outranks a driven one. Call before MergeRevisits. radius <= 12 m (the grid's cell).
   void DropExtensionsOverThePath(double radius, double min_gap);
 
   // Vertical clearance (m) between an object and a street at another level:
@@ -96,13 +144,13 @@ class StreetPath {
  private:
   bool AnySampleZoneContains(const Eigen::Vector3d& q, Zone zone, double margin, int ignore_begin, int ignore_end,
                              double object_height) const;
-  std::pair<int, int> Cell(const Eigen::Vector3d& q) const;
-  Eigen::Vector3d down_, axis_a_, axis_b_;  // down + horizontal basis
+  // m: cell of the samples' grid; MergeRevisits' and DropExtensionsOverThePath's radius may not exceed it.
+  static constexpr double kGridCellSize = 12.0;
+  Eigen::Vector3d down_;
   double spacing_;
   std::vector<PathSample> samples_;
   std::vector<double> pose_s_;
-  double cell_size_ = 12.0;
-  std::unordered_map<int64_t, std::vector<int>> grid_;
+  HorizontalGrid grid_;  // samples by their road point
 };
 
 // Recorded trajectories drift in altitude (KITTI's ground truth comes from GPS/IMU): where a path
@@ -120,7 +168,7 @@ constexpr double kStandingStillDistance = 0.05;
 
 struct AltitudeReconciliationOptions {
   double radius = 12.0;         // m: path points this close horizontally share road or sidewalk
-  double min_gap = 60.0;        // m of arc length between them (closer = the same pass)
+  double min_gap = kRevisitMinArcGap;  // m of arc length between them (closer = the same pass)
   // m: passes farther apart vertically are different levels (a bridge deck is >= ~5 m above the
   // road below it); above KITTI 08's largest drift between passes (6.4 m).
   double max_difference = 8.0;

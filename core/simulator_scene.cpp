@@ -433,8 +433,8 @@ Scene BuildStreetScene(StreetPath& path, const SceneOptions& options, uint64_t s
                   std::sin(elevation) * scene.down)
                      .normalized();
   AssignProfiles(path, seed);
-  if (options.extensions_yield) path.DropExtensionsOverThePath(AltitudeReconciliationOptions().radius, 60.0);
-  path.MergeRevisits(4.0, 60.0);
+  if (options.extensions_yield) path.DropExtensionsOverThePath(kExtensionYieldRadius, kRevisitMinArcGap);
+  path.MergeRevisits(kRevisitMergeRadius, kRevisitMinArcGap);
   SceneBuilder builder(&scene, scene.down);
   BuildStreetSurfaces(path, options, &builder, &scene);
   PlaceStreetObjects(path, options, seed, &builder, &scene);

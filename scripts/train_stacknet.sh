@@ -75,7 +75,7 @@ CAR_DETAIL=${CAR_DETAIL:-$([[ $WORLDS == v4c* ]] && echo -1 || echo 0)}
 case $WORLDS in
   v3 | v4 | v4c) WORLD_VERSION=${WORLD_VERSION:-1} ;;
   v4c2) WORLD_VERSION=${WORLD_VERSION:-2} ;;
-  *) WORLD_VERSION=${WORLD_VERSION:-} ;;  # empty: the binary's current one, asked when a world is rendered
+  *) WORLD_VERSION=${WORLD_VERSION:-} ;;  # empty: the binary's current one (below)
 esac
 DATA=${DATA:-/tmp/dvso_stacknet_$WORLDS}
 RUN=${RUN:-$DATA/run_main}
@@ -103,6 +103,8 @@ RENDER_H=192
 run() { nice -n "$NICE" "$@"; }
 log() { echo "[$(date -u +%H:%M:%S)] $*"; }
 [[ -x "$DVSO" ]] || { echo "error: $DVSO not found (build first: scripts/build.sh)" >&2; exit 1; }
+# The world version this run renders and reads, from here on fixed.
+if [[ -z $WORLD_VERSION ]]; then WORLD_VERSION=$(binary_world_version "$DVSO"); fi
 
 # name  pose file  first pose  frames  world seed. Training: 00-07; held out: 08-10.
 # 36 worlds of 60 frames (2160 training frames), spread evenly along each trajectory (worlds per
@@ -158,36 +160,31 @@ TB_WORLDS=("tb05 05 1000 300 9505" "tb00 00 3000 300 9701" "tb02 02 1500 300 970
 # Frames of each held-out segment used for the per-epoch curve (every 5th: 90 frames).
 CURVE_STEP=5
 
-# The world version this run renders: $WORLD_VERSION, else the binary's current one.
-wanted_world_version() {
-  if [[ -n $WORLD_VERSION ]]; then echo "$WORLD_VERSION"; else binary_world_version "$DVSO" || exit 1; fi
-}
-
-# Returns 0 when world `name` is complete and the wanted version, 1 when it is absent; a complete world of another
+# Returns 0 when world `name` is complete and $WORLD_VERSION, 1 when it is absent; a complete world of another
 # version is an error (training on it would mix worlds), except for WORLDS=smoke, whose worlds only test this script
 # and are rendered again.
-cached_world_is_current() {  # name version
+cached_world_is_current() {  # name
   local yaml="$DATA/$1/simulation.yaml"  # written after the last frame
   [[ -f $yaml ]] || return 1
   local recorded
   recorded=$(recorded_world_version "$yaml")
-  [[ $recorded == "$2" ]] && return 0
+  [[ $recorded == "$WORLD_VERSION" ]] && return 0
   if [[ $WORLDS == smoke ]]; then
     rm -rf "${DATA:?}/$1"
     return 1
   fi
-  echo "error: $DATA/$1 is simulator world version $recorded, this run wants version $2: delete it (with the runs" \
+  echo "error: $DATA/$1 is simulator world version $recorded, this run wants version $WORLD_VERSION: delete it (with the runs" \
     "trained on it) to render it again, or set WORLD_VERSION=$recorded to use it as it is" >&2
   exit 1
 }
 
-# Every cached world of the set must be the wanted version before a step reads them (train, finetune, eval).
+# Every world of the set must be there, complete and $WORLD_VERSION, before a step reads them (train, finetune, eval).
 check_cached_worlds() {
-  local version spec
-  version=$(wanted_world_version)
+  local spec
   for spec in "${TEST_SEGMENTS[@]}" "${TRAIN_SEGMENTS[@]}"; do
     set -- $spec
-    cached_world_is_current "$1" "$version" || true
+    cached_world_is_current "$1" ||
+      { echo "error: $DATA/$1 is missing or incomplete: run the data step first" >&2; exit 1; }
   done
 }
 
@@ -195,12 +192,10 @@ check_cached_worlds() {
 simulate_world() {  # name pose first count seed [simulate options...]
   local name=$1 pose=$2 first=$3 count=$4 seed=$5
   shift 5
-  local version
-  version=$(wanted_world_version)
-  cached_world_is_current "$name" "$version" && return 0
-  log "simulate $name (KITTI $pose from pose $first, $count frames, seed $seed, world version $version) $*"
+  cached_world_is_current "$name" && return 0
+  log "simulate $name (KITTI $pose from pose $first, $count frames, seed $seed, world version $WORLD_VERSION) $*"
   run "$DVSO" simulate --out "$DATA/$name" --trajectory "data/kitti_poses/$pose.txt" --first "$first" --count "$count" \
-    --seed "$seed" --appearance varied --car-detail "$CAR_DETAIL" --world-version "$version" "$@" --quiet \
+    --seed "$seed" --appearance varied --car-detail "$CAR_DETAIL" --world-version "$WORLD_VERSION" "$@" --quiet \
     > "$DATA/$name.simulate.log"
 }
 

@@ -16,6 +16,46 @@
 namespace dvso::sim {
 namespace {
 
+TEST(HorizontalGrid, VisitsEveryPointWithinACellSizeIgnoresHeightAndStopsWhenAsked) {
+  // Camera y down: the horizontal plane is x-z. Points on a 1 m lattice around the origin, also at
+  // negative cells, with heights that must not matter.
+  const double cell = 5.0;
+  HorizontalGrid grid(Eigen::Vector3d::UnitY(), cell);
+  std::vector<Eigen::Vector3d> points;
+  for (int x = -20; x <= 20; ++x)
+    for (int z = -20; z <= 20; ++z) {
+      points.emplace_back(x, 7.0 * ((x + z) % 3), z);
+      grid.Insert(points.back(), static_cast<int>(points.size()) - 1);
+    }
+  for (const Eigen::Vector3d& q : {Eigen::Vector3d(0.3, 0, -0.2), Eigen::Vector3d(-13.7, -40, 9.1)}) {
+    std::vector<int> visited;
+    EXPECT_FALSE(grid.AnyNear(q, [&](int i) {
+      visited.push_back(i);
+      return false;
+    }));
+    std::sort(visited.begin(), visited.end());
+    EXPECT_TRUE(std::adjacent_find(visited.begin(), visited.end()) == visited.end());  // each once
+    int within = 0;
+    for (int i = 0; i < static_cast<int>(points.size()); ++i) {
+      const Eigen::Vector3d d = points[i] - q;
+      if (std::hypot(d.x(), d.z()) > cell) continue;
+      ++within;
+      EXPECT_TRUE(std::binary_search(visited.begin(), visited.end(), i)) << "point " << i << " missed";
+    }
+    EXPECT_GT(within, 70);
+    // Nothing outside the 3x3 cells around q's cell: less than two cells away along each axis.
+    for (int i : visited) {
+      const Eigen::Vector3d d = points[i] - q;
+      EXPECT_LT(std::max(std::abs(d.x()), std::abs(d.z())), 2 * cell);
+    }
+    // Stops at the first point visit accepts.
+    int calls = 0;
+    EXPECT_TRUE(grid.AnyNear(q, [&](int) { return ++calls == 3; }));
+    EXPECT_EQ(calls, 3);
+  }
+  EXPECT_THROW(HorizontalGrid(Eigen::Vector3d::UnitY(), 0.0), Error);
+}
+
 TEST(SimulatorTexture, BilinearAndMipLevelsByHand) {
   // 4x4 texture: value = x (column index) / 4.
   std::vector<float> texels(16);
@@ -135,7 +175,7 @@ TEST(SimulatorPath, DrivingBackAlongTheSameStreetIsMerged) {
   }
   StreetPath path(poses, 1.65, 2.0, 20.0);
   for (auto& s : path.mutable_samples()) s.profile.left_edge = -2.0;  // narrow one-way street
-  path.MergeRevisits(4.0, 60.0);
+  path.MergeRevisits(kRevisitMergeRadius, kRevisitMinArcGap);
   int merged = 0;
   for (const auto& s : path.samples()) merged += s.merged_into >= 0;
   EXPECT_GT(merged, 35);  // most of the way back
@@ -167,8 +207,8 @@ TEST(SimulatorPath, InventedStreetsBeyondTheEndsYieldToTheDrivenPath) {
   leg({-100, 0, -100}, {0, 0, -100}, 1.0);
   leg({0, 0, -100}, {0, 0, -250}, 1.0);
   StreetPath path(poses, 1.65, 2.0, 300.0);
-  path.DropExtensionsOverThePath(12.0, 60.0);
-  path.MergeRevisits(4.0, 60.0);
+  path.DropExtensionsOverThePath(kExtensionYieldRadius, kRevisitMinArcGap);
+  path.MergeRevisits(kRevisitMergeRadius, kRevisitMinArcGap);
   const double total = path.PoseArcLength(static_cast<int>(poses.size()) - 1);
   int dropped = 0, onto_extension = 0;
   for (const PathSample& sample : path.samples()) {
