@@ -95,7 +95,8 @@ StreetSimulator::StreetSimulator(const SimulatorOptions& options) : options_(opt
   textures_ = std::make_unique<sim::TextureBank>(options_.seed, options_.texture_size);
   scene_ = sim::BuildStreetScene(*path_, options_.scene, options_.seed);
   renderer_ = std::make_unique<sim::Renderer>(scene_, *textures_, options_.camera.left, options_.num_threads,
-                                              options_.max_distance, options_.edge_antialiasing);
+                                              options_.max_distance, options_.edge_antialiasing,
+                                              /*uncovered_subsamples_see_sky=*/options_.world_version < 4);
 
   // Exposure drift: mean-reverting random walks of log gain and bias (DSO's
   // affine brightness a, b), the same for the left and right image of a frame.

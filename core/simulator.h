@@ -29,7 +29,9 @@ namespace dvso {
 //   2: altitude drift of recorded paths reconciled at revisits (session 38; its simulation.yaml says
 //      `reconcile_altitude: true`)
 //   3: the invented streets before the first / after the last pose yield to the driven path (session 39)
-constexpr int kSimulatorWorldVersion = 3;
+//   4: an anti-aliasing sub-sample of an edge pixel that hits none of the surfaces seen around it is left
+//      out, not painted as sky (session 40; a bright fringe below the horizon at far kerbs and object feet)
+constexpr int kSimulatorWorldVersion = 4;
 constexpr double kVariedCameraHeightRange = 0.1;  // varied look: camera height = camera_height +- this (m)
 constexpr double kVariedHeightJitter = 0.03;      // varied look: per-frame height bounce bound at least this (m)
 
@@ -48,7 +50,8 @@ struct SimulatorOptions {
   // altitude drift is corrected where the path comes back to a place, so that the camera stays
   // camera_height above the one street laid there (sim::AltitudeCorrections; GT poses are the
   // corrected ones); from 3 the invented streets beyond the path's ends yield to the driven path
-  // (SceneOptions::extensions_yield, set from this by the constructor).
+  // (SceneOptions::extensions_yield, set from this by the constructor); from 4 no sky below the horizon
+  // in the anti-aliasing of edge pixels (Renderer's uncovered_subsamples_see_sky).
   int world_version = kSimulatorWorldVersion;
   double frame_interval = 0.1;      // seconds between trajectory poses (times.txt)
   double max_distance = 300.0;      // nothing farther than this is drawn (m)

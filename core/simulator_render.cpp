@@ -61,13 +61,14 @@ void ParallelTiles(int num_tiles, int num_threads, const Work& work) {
 }  // namespace
 
 Renderer::Renderer(const Scene& scene, const TextureBank& textures, const PinholeCamera& camera, int num_threads,
-                   double max_distance, bool edge_antialiasing)
+                   double max_distance, bool edge_antialiasing, bool uncovered_subsamples_see_sky)
     : scene_(scene),
       shader_(scene, textures),
       camera_(camera),
       num_threads_(num_threads),
       max_distance_(max_distance),
-      edge_antialiasing_(edge_antialiasing) {
+      edge_antialiasing_(edge_antialiasing),
+      uncovered_subsamples_see_sky_(uncovered_subsamples_see_sky) {
   camera_.Check();
   Require(num_threads >= 1, "number of render threads must be >= 1");
   Require(max_distance > 1.0, "render distance must be > 1 m");
@@ -292,15 +293,18 @@ RenderedView Renderer::Render(const Eigen::Isometry3d& T_world_camera, const Pho
         if (edge_antialiasing_ && is_edge(x, y)) {
           // Candidate triangles: those visible in the 3x3 neighbourhood.
           int candidates[9], count = 0;
+          bool sky_beside = false;
           for (int dy = -1; dy <= 1; ++dy)
             for (int dx = -1; dx <= 1; ++dx) {
               const int xx = x + dx, yy = y + dy;
               if (xx < 0 || yy < 0 || xx >= width || yy >= height) continue;
               const int id = ids[static_cast<size_t>(yy) * width + xx];
+              sky_beside |= id < 0;
               if (id >= 0 && std::find(candidates, candidates + count, id) == candidates + count) candidates[count++] = id;
             }
           static const double kOffsets[4][2] = {{-0.125, -0.375}, {0.375, -0.125}, {0.125, 0.375}, {-0.375, 0.125}};
           Eigen::Vector3f sum = radiance;
+          int samples = 1;
           for (const auto& o : kOffsets) {
             const double sx = x + o[0], sy = y + o[1];
             int best = -1;
@@ -315,10 +319,15 @@ RenderedView Renderer::Render(const Eigen::Isometry3d& T_world_camera, const Pho
                 best = candidates[c];
               }
             }
+            // No candidate covers the sample: a surface seen at no pixel centre around it (a ground strip
+            // thinner than a pixel beyond ~45 m, a kerb face). Sky there would be a bright fringe below the
+            // horizon that the other camera sees elsewhere; it is sky only where sky is seen beside it.
+            if (best < 0 && !sky_beside && !uncovered_subsamples_see_sky_) continue;
             double unused = 0;
             sum += shade(sx, sy, best, &unused);
+            ++samples;
           }
-          radiance = sum / 5.f;  // centre + 4 sub-samples
+          radiance = sum / static_cast<float>(samples);  // centre + up to 4 sub-samples
         }
         // Camera: exposure gain/bias, vignetting, noise, 8-bit quantisation.
         const float vignette = static_cast<float>(lens.At(radial_position.Sq(x, y)));

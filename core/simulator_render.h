@@ -53,8 +53,11 @@ class Renderer {
  public:
   // max_distance: geometry farther than this (m, along the optical axis) is not drawn.
   // edge_antialiasing: 4 extra samples on pixels at depth edges and creases.
+  // uncovered_subsamples_see_sky: such a sample that hits none of the surfaces seen at the 3x3 pixel
+  // centres around it shades sky, as in simulator world versions 1-3 (core/simulator.h); false
+  // (version 4): sky only when one of those centres sees sky, else the sample is left out.
   Renderer(const Scene& scene, const TextureBank& textures, const PinholeCamera& camera, int num_threads,
-           double max_distance, bool edge_antialiasing = true);
+           double max_distance, bool edge_antialiasing = true, bool uncovered_subsamples_see_sky = false);
 
   // Renders the view of a camera at T_world_camera (camera-to-world, camera y down).
   RenderedView Render(const Eigen::Isometry3d& T_world_camera, const Photometric& photometric,
@@ -67,6 +70,7 @@ class Renderer {
   int num_threads_;
   double max_distance_;
   bool edge_antialiasing_;
+  bool uncovered_subsamples_see_sky_;
 };
 
 }  // namespace dvso::sim

@@ -170,7 +170,8 @@ void AddSimulateCommand(CLI::App& app) {
   cmd->add_option("--world-version", o.world_version,
                   "render the world of this simulator version, exactly (1: before session 38; 2: the recorded "
                   "altitude drift corrected where the path comes back to a place, GT poses the corrected ones; 3: "
-                  "the invented streets beyond the path's ends yield to the driven path; core/simulator.h)")
+                  "the invented streets beyond the path's ends yield to the driven path; 4: edge anti-aliasing puts no sky "
+                  "below the horizon; core/simulator.h)")
       ->capture_default_str();
   cmd->add_option("--building-density", o.scene.building_density, "fraction of the street lined by buildings")
       ->capture_default_str();
