@@ -1,6 +1,8 @@
 #include "pipelines/prediction_source.h"
 
 #include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <vector>
 
@@ -26,8 +28,9 @@ void AddPredictionOptions(CLI::App* cmd, PredictionSourceArgs* args, const std::
                   "(N,H,W) normalised by width");
   cmd->add_option("--disparity-right", args->disparity_right, "dvso: precomputed D^R (same format)");
   cmd->add_option("--virtual-baseline", args->virtual_baseline,
-                  "dvso: b_v in metres (default: the model's training baseline, or its tuned one, for every camera; the "
-                  "sequence's baseline for files)")
+                  "dvso: b_v in metres (default: the model's training baseline, or its tuned one, for every camera; for "
+                  "files that of the model `dvso predict` recorded in their prediction_info.json, else the sequence's "
+                  "baseline)")
       ->check(Positive());
   cmd->add_option("--prediction-schedule", args->schedule,
                   "dvso: keyframe-async (a keyframe's prediction runs on a worker while the next frames are tracked) | "
@@ -57,10 +60,42 @@ std::string ShippedModelPath() {
   return std::filesystem::is_regular_file(path) ? path : "";
 }
 
+namespace {
+
+// predict's record of the maps in `maps_dir` (one folder up). A trailing slash, as tab completion writes it,
+// must not move the record's folder.
+std::string PredictionRecordOf(const std::string& maps_dir) {
+  return (NormalizedFolderPath(maps_dir).parent_path() / kPredictionInfoFile).string();
+}
+
+// Sets b_v (tuned and untuned) and the metadata from a model's training camera.
+void TakeBaselinesOfModel(const ModelMetadata& metadata, PredictionSource* out) {
+  out->untuned_virtual_baseline = VirtualBaselineOfModel(metadata, /*tuned=*/false);
+  out->virtual_baseline = VirtualBaselineOfModel(metadata, /*tuned=*/true);
+  out->tuned = metadata.tuned_baseline > 0;
+  out->metadata = metadata;
+}
+
+}  // namespace
+
+std::optional<ModelMetadata> RecordedModelMetadata(const std::string& maps_dir) {
+  const std::string record = PredictionRecordOf(maps_dir);
+  if (!std::filesystem::is_regular_file(record)) return std::nullopt;
+  nlohmann::json j;
+  try {
+    std::ifstream in(record);
+    in >> j;
+  } catch (const std::exception& e) {
+    throw Error(record, std::string("cannot parse: ") + e.what());
+  }
+  if (!j.is_object() || !j.contains("model_metadata")) return std::nullopt;
+  RequireFile(j["model_metadata"].is_object(), record, "\"model_metadata\" must be an object");
+  return ModelMetadata::FromJson(j["model_metadata"].dump(), record);
+}
+
 void RequireMapsOfCameraPair(const std::string& maps_dir, CameraPair pair) {
   if (maps_dir.empty()) return;
-  // (A trailing slash, as tab completion writes it, must not move the record's folder.)
-  const std::string record = (NormalizedFolderPath(maps_dir).parent_path() / kPredictionInfoFile).string();
+  const std::string record = PredictionRecordOf(maps_dir);
   const std::optional<CameraPair> recorded = RecordedCameraPair(record);
   if (!recorded || *recorded == pair) return;
   const std::string made = CameraPairName(*recorded), want = CameraPairName(pair);
@@ -79,13 +114,28 @@ PredictionSource OpenPredictionSource(const PredictionSourceArgs& args, const Se
     RequireMapsOfCameraPair(args.disparity_left, sequence.camera_pair());
     RequireMapsOfCameraPair(args.disparity_right, sequence.camera_pair());
     out.source = std::make_unique<FileDisparitySource>(args.disparity_left, args.disparity_right, std::move(names));
-    // Precomputed disparities are taken to be in this camera's stereo geometry.
-    out.virtual_baseline = args.virtual_baseline > 0 ? args.virtual_baseline : sequence.camera().baseline;
-    out.untuned_virtual_baseline = out.virtual_baseline;
-    Require(out.virtual_baseline > 0, sequence.root() +
-                                          ": the sequence has no stereo baseline to interpret the disparity files: "
-                                          "pass --virtual-baseline");
     description << "disparities from files " << args.disparity_left << " / " << args.disparity_right;
+    // Maps `dvso predict` wrote are the network's: b_v as if the model ran online (same scale either way).
+    const std::optional<ModelMetadata> left_model = RecordedModelMetadata(args.disparity_left),
+                                       right_model = RecordedModelMetadata(args.disparity_right);
+    if (left_model && right_model)
+      Require(left_model->ToJson() == right_model->ToJson(),
+              "--disparity-left and --disparity-right were predicted by different models (their " +
+                  std::string(kPredictionInfoFile) + " records differ)");
+    const std::optional<ModelMetadata>& maker = left_model ? left_model : right_model;
+    if (args.virtual_baseline > 0) {
+      out.virtual_baseline = out.untuned_virtual_baseline = args.virtual_baseline;
+    } else if (maker && maker->has_camera()) {
+      TakeBaselinesOfModel(*maker, &out);
+      description << " (predicted by a model trained with baseline " << maker->baseline << " m, as its "
+                  << kPredictionInfoFile << " records)";
+    } else {
+      // Maps from elsewhere are taken to be in this camera's stereo geometry.
+      out.virtual_baseline = out.untuned_virtual_baseline = sequence.camera().baseline;
+      Require(out.virtual_baseline > 0, sequence.root() +
+                                            ": the sequence has no stereo baseline to interpret the disparity files: "
+                                            "pass --virtual-baseline");
+    }
   } else {
     std::string model = args.model;
     if (model.empty()) {
@@ -99,9 +149,7 @@ PredictionSource OpenPredictionSource(const PredictionSourceArgs& args, const Se
     } else {
       RequireFile(metadata.has_camera(), model,
                   "the model carries no training camera (re-export it with `dvso export`, or pass --virtual-baseline)");
-      out.untuned_virtual_baseline = VirtualBaselineOfModel(metadata, /*tuned=*/false);
-      out.virtual_baseline = VirtualBaselineOfModel(metadata, /*tuned=*/true);
-      out.tuned = metadata.tuned_baseline > 0;
+      TakeBaselinesOfModel(metadata, &out);
     }
     out.metadata = metadata;
     description << "model " << model << " (" << metadata.input_width << "x" << metadata.input_height

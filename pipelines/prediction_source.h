@@ -6,6 +6,7 @@
 
 #include <CLI/CLI.hpp>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "core/disparity_conversion.h"
@@ -39,13 +40,18 @@ struct PredictionSource {
 };
 
 // Opens the source for `sequence` and resolves b_v: --virtual-baseline, else
-// from the model's training camera (ModelMetadata), else (files) the
-// sequence's own stereo baseline. Every precondition (files present, model
-// loadable) is checked here, before any output is written.
+// from the model's training camera (ModelMetadata): the model run online, or
+// for files the model `dvso predict` recorded as their maker; else (files from
+// elsewhere) the sequence's own stereo baseline. Every precondition (files
+// present, model loadable) is checked here, before any output is written.
 PredictionSource OpenPredictionSource(const PredictionSourceArgs& args, const SequenceReader& sequence);
 
-// `dvso predict --sequence` records the camera pair its maps belong to in <out>/prediction_info.json.
+// `dvso predict` records in <out>/prediction_info.json the model's metadata ("model_metadata": its b_v
+// for `odometry --disparity-left`) and, with --sequence, the camera pair its maps belong to.
 inline constexpr const char* kPredictionInfoFile = "prediction_info.json";
+// The metadata of the model that predicted the maps in `maps_dir` (predict's left/ or right/, record one
+// folder up); nullopt for maps without a record or a record without it (written before session 40).
+std::optional<ModelMetadata> RecordedModelMetadata(const std::string& maps_dir);
 // Throws dvso::Error naming the record when the maps in `maps_dir` (predict's left/ or right/, record one
 // folder up) were predicted on another pair than `pair` (the run's sequence reads); maps without a record
 // are not checked.

@@ -173,14 +173,16 @@ void RunPredict(const PredictArgs& args) {
               << " predicted disparities beyond the KITTI PNG range (" << kKittiMapMaxValue
               << " px): written as invalid (0)" << std::endl;
   }
-  // Which pair the maps were predicted on: `odometry --disparity-left` checks it against the pair it reads
-  // (a raw drive's colour maps on its grey images sit ~6 cm off). Images without a pair record nothing.
-  const std::string info = JoinPath(args.out, kPredictionInfoFile);
+  // The model's metadata: `odometry --disparity-left` takes b_v from it, as when the model runs online. Which
+  // pair the maps were predicted on: it checks that against the pair it reads (a raw drive's colour maps on its
+  // grey images sit ~6 cm off); a folder of images has no pair.
+  nlohmann::json info{{"model", args.model}, {"model_metadata", nlohmann::json::parse(predictor.metadata().ToJson())}};
   if (!cameras.empty()) {
-    WriteStreamAtomically(info, [&](std::ostream& out) {
-      out << nlohmann::json{{"sequence", args.sequence}, {"cameras", cameras}, {"model", args.model}}.dump(2) << "\n";
-    });
+    info["sequence"] = args.sequence;
+    info["cameras"] = cameras;
   }
+  WriteStreamAtomically(JoinPath(args.out, kPredictionInfoFile),
+                        [&](std::ostream& out) { out << info.dump(2) << "\n"; });
   std::cout << "Wrote " << count << " left/right disparity maps to " << args.out << std::endl;
 }
 

@@ -114,5 +114,41 @@ TEST(PredictInputs, OdometryRefusesMapsOfAnotherCameraPair) {
   EXPECT_EQ(colour.exit_code, 0) << colour.out;
 }
 
+// Maps `dvso predict` wrote are the network's: `odometry --disparity-left` takes b_v from the model its record
+// names, as `--model` would, not the sequence's own baseline (else the scale moves by b_cam / b_t); maps
+// without a record keep the camera's baseline, and --virtual-baseline still overrides.
+TEST(PredictInputs, OdometryOnPredictedMapsTakesThePredictingModelsVirtualBaseline) {
+  const testing::TempDir dir("predict_baseline");
+  const testing::CliRun sim =
+      testing::RunDvso("simulate --quiet --out " + (dir / "seq") + " --count 6 --width 128 --height 64");
+  ASSERT_EQ(sim.exit_code, 0) << sim.out;
+  const std::string model = dir / "tiny.pt";
+  ASSERT_EQ(testing::RunDvso("export --config " + std::string(DVSO_TEST_DATA_DIR) +
+                             "/../configs/stacknet_tiny.yaml --random-init --model simple --training-baseline 0.3125 "
+                             "--training-fx-over-width 0.58 --out " + model)
+                .exit_code,
+            0);
+  const testing::CliRun predicted = testing::RunDvso("predict --model " + model + " --sequence " + (dir / "seq") +
+                                                     " --no-color --out " + (dir / "maps"));
+  ASSERT_EQ(predicted.exit_code, 0) << predicted.out;
+  const std::string files = " --disparity-left " + (dir / "maps/left") + " --disparity-right " + (dir / "maps/right");
+  auto header_of = [&](const std::string& extra, const std::string& out) {
+    const testing::CliRun run = testing::RunDvso("odometry --mode dvso --no-progress --sequence " + (dir / "seq") +
+                                                 files + extra + " --out " + (dir / out));
+    EXPECT_EQ(run.exit_code, 0) << run.out;
+    return run.out;
+  };
+  const std::string from_model = header_of("", "a");
+  EXPECT_NE(from_model.find("virtual baseline 0.3125 m"), std::string::npos) << from_model;
+  EXPECT_NE(from_model.find("trained with baseline 0.3125 m"), std::string::npos) << from_model;
+  const std::string overridden = header_of(" --virtual-baseline 0.4375", "b");
+  EXPECT_NE(overridden.find("virtual baseline 0.4375 m"), std::string::npos) << overridden;
+  // Without predict's record: the simulated camera's own baseline (0.537 m, as KITTI's).
+  fs::remove(dir.path / "maps/prediction_info.json");
+  const std::string from_camera = header_of("", "c");
+  EXPECT_EQ(from_camera.find("virtual baseline 0.3125 m"), std::string::npos) << from_camera;
+  EXPECT_NE(from_camera.find("virtual baseline 0.537"), std::string::npos) << from_camera;
+}
+
 }  // namespace
 }  // namespace dvso
