@@ -237,8 +237,10 @@ TEST(Networks, ChannelsLastTrainingGivesTheGradientsOfNchw) {
       const double channels_last_error = (gradients[kChannelsLast][i] - reference).norm().item<double>() / norm;
       // float32 rounding (measured: SimpleNet stage NCHW ~1e-5, channels-last ~3e-4 relative; StackNet stage both
       // ~5e-3, its loss goes through the frozen SimpleNet's float32 outputs): channels-last within 2x NCHW's
-      // error or 0.2 %. A layout bug (pixels or channels mixed up) would be of order 1.
-      EXPECT_LE(channels_last_error, std::max(2.0 * nchw_error, 2e-3))
+      // error or 1 %. A layout bug (pixels or channels mixed up) would be of order 1. (0.2 % until session 40:
+      // on an AVX-512 Sapphire Rapids CPU oneDNN's channels-last kernels round differently, 0.23 % against
+      // NCHW's 0.06 % on one StackNet weight.)
+      EXPECT_LE(channels_last_error, std::max(2.0 * nchw_error, 1e-2))
           << model << " " << names[i] << " (NCHW " << nchw_error << ")";
     }
     // Gradients reach most of the trained network in this test, not only the heads.

@@ -19,6 +19,13 @@ struct SimulatedSequence {
   double path_length = 0;
 };
 
+// The simulator world version of this sequence, fixed so that a simulator change does not move the System tests'
+// fixture under them. Version 4 (session 40) changed the edge pixels' anti-aliasing, and two tests' thresholds then
+// failed: SystemSimulated.StereoTracksEveryFrameWithMetricScale (oldest keyframe 39 frames back for < 36; 34 in
+// version 3: DSO's distance score keeps the first keyframe in both) and ...RightVignetteFileCorrectsTheRightLensAlone
+// (one early keyframe's corrected transfer 1.78 % off at 200 for a 1.5 % + 0.5 band). Both margins were one world's.
+constexpr int kVoTestWorldVersion = 3;
+
 // `frames` frames from the start of KITTI 00's poses at 416x128 (cached per frame count).
 inline const SimulatedSequence& SimulatedKitti00(int frames) {
   static std::deque<std::pair<int, SimulatedSequence>> cache;  // deque: references stay valid
@@ -32,6 +39,7 @@ inline const SimulatedSequence& SimulatedKitti00(int frames) {
   o.camera = StereoCamera{}.Resized(416, 128);
   o.texture_size = 256;
   o.num_threads = 2;
+  o.world_version = kVoTestWorldVersion;
   StreetSimulator sim(o);
   SimulatedSequence s;
   s.camera = sim.camera();

@@ -311,7 +311,9 @@ TEST(SystemSimulated, RightVignetteFileCorrectsTheRightLensAlone) {
       const std::string what = e.what();
       EXPECT_NE(what.find(std::string(right ? "right_vignette_file" : "vignette_file") + " is "), std::string::npos)
           << what;
-      if (!right) EXPECT_EQ(what.find("right_vignette_file"), std::string::npos) << what;
+      if (!right) {
+        EXPECT_EQ(what.find("right_vignette_file"), std::string::npos) << what;
+      }
       EXPECT_NE(what.find("vignette_small.png"), std::string::npos) << what;
     }
   }
