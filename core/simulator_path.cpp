@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <string>
 #include <utility>
 
 #include <Eigen/Sparse>
@@ -168,7 +169,8 @@ bool StreetPath::AnySampleZoneContains(const Eigen::Vector3d& q, Zone zone, doub
 }
 
 void StreetPath::DropExtensionsOverThePath(double radius, double min_gap) {
-  Require(radius > 0 && radius <= grid_.cell_size(), "invented streets: the yield radius must be in (0, 12] m");
+  Require(radius > 0 && radius <= grid_.cell_size(),
+          "invented streets: the yield radius must be in (0, " + std::to_string(std::lround(grid_.cell_size())) + "] m");
   const double total = pose_s_.back();
   for (PathSample& e : samples_) {
     if (e.s >= 0 && e.s <= total) continue;  // a sample of the driven path
@@ -190,7 +192,8 @@ void StreetPath::DropExtensionsOverThePath(double radius, double min_gap) {
 }
 
 void StreetPath::MergeRevisits(double radius, double min_gap) {
-  Require(radius > 0 && radius <= grid_.cell_size(), "revisits: the merge radius must be in (0, 12] m");
+  Require(radius > 0 && radius <= grid_.cell_size(),
+          "revisits: the merge radius must be in (0, " + std::to_string(std::lround(grid_.cell_size())) + "] m");
   const int n = static_cast<int>(samples_.size());
   for (int j = 0; j < n; ++j) {
     PathSample& b = samples_[j];

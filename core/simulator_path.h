@@ -50,7 +50,7 @@ enum class Zone {
 // `cell_size` m: the one neighbour search of the street path and of the altitude pairs.
 class HorizontalGrid {
  public:
-  HorizontalGrid() = default;
+  HorizontalGrid() = default;  // empty; assign a constructed grid before use (StreetPath's member)
   HorizontalGrid(const Eigen::Vector3d& down, double cell_size);
   void Insert(const Eigen::Vector3d& q, int index);
   double cell_size() const { return cell_size_; }

@@ -120,21 +120,27 @@ PredictionSource OpenPredictionSource(const PredictionSourceArgs& args, const Se
                                        right_model = RecordedModelMetadata(args.disparity_right);
     if (left_model && right_model)
       Require(left_model->ToJson() == right_model->ToJson(),
-              "--disparity-left and --disparity-right were predicted by different models (their " +
-                  std::string(kPredictionInfoFile) + " records differ)");
+              "--disparity-left and --disparity-right were predicted by different models: " +
+                  PredictionRecordOf(args.disparity_left) + " and " + PredictionRecordOf(args.disparity_right) +
+                  " differ");
     const std::optional<ModelMetadata>& maker = left_model ? left_model : right_model;
+    const std::string maker_record = PredictionRecordOf(left_model ? args.disparity_left : args.disparity_right);
     if (args.virtual_baseline > 0) {
       out.virtual_baseline = out.untuned_virtual_baseline = args.virtual_baseline;
-    } else if (maker && maker->has_camera()) {
+    } else if (maker) {
+      // As --model with that model: one without a training camera cannot say what its disparities mean.
+      RequireFile(maker->has_camera(), maker_record,
+                  "the model that predicted the maps carries no training camera: pass --virtual-baseline");
       TakeBaselinesOfModel(*maker, &out);
-      description << " (predicted by a model trained with baseline " << maker->baseline << " m, as its "
-                  << kPredictionInfoFile << " records)";
+      description << " (predicted by a model trained with baseline " << maker->baseline << " m, as " << maker_record
+                  << " records)";
     } else {
-      // Maps from elsewhere are taken to be in this camera's stereo geometry.
+      // Maps from elsewhere (or predicted before session 40) are taken to be in this camera's stereo geometry.
       out.virtual_baseline = out.untuned_virtual_baseline = sequence.camera().baseline;
       Require(out.virtual_baseline > 0, sequence.root() +
                                             ": the sequence has no stereo baseline to interpret the disparity files: "
                                             "pass --virtual-baseline");
+      description << " (no predicting model recorded with them: the sequence's stereo baseline)";
     }
   } else {
     std::string model = args.model;

@@ -35,7 +35,7 @@ struct PredictionSource {
   double virtual_baseline = 0;              // resolved b_v for this sequence's camera (tuned when the model has one)
   double untuned_virtual_baseline = 0;      // b_v from the training baseline alone (ablation rows without tb)
   bool tuned = false;                       // virtual_baseline is the model's tuned one (paper "tb")
-  ModelMetadata metadata;                   // of the model (empty for files)
+  ModelMetadata metadata;                   // of the model (for files: the one predict recorded, else empty)
   std::string description;                  // one line for the run header
 };
 

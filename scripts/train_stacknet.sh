@@ -178,10 +178,12 @@ cached_world_is_current() {  # name
   exit 1
 }
 
-# Every world of the set must be there, complete and $WORLD_VERSION, before a step reads them (train, finetune, eval).
-check_cached_worlds() {
-  local spec
-  for spec in "${TEST_SEGMENTS[@]}" "${TRAIN_SEGMENTS[@]}"; do
+# The worlds a step reads must be there, complete and $WORLD_VERSION: the held-out ones, and with `all` the training
+# ones too (train and finetune; eval reads only the held-out ones, so pruned training worlds do not stop it).
+check_cached_worlds() {  # [all]
+  local spec segments=("${TEST_SEGMENTS[@]}")
+  [[ ${1:-} == all ]] && segments+=("${TRAIN_SEGMENTS[@]}")
+  for spec in "${segments[@]}"; do
     set -- $spec
     cached_world_is_current "$1" ||
       { echo "error: $DATA/$1 is missing or incomplete: run the data step first" >&2; exit 1; }
@@ -323,7 +325,7 @@ curve_monitor() {
 step_train() {
   mkdir -p "$RUN"
   if [[ -f "$RUN/checkpoint_final.pt" ]]; then log "training $RUN already finished"; return 0; fi
-  check_cached_worlds
+  check_cached_worlds all
   local resume=()
   [[ -f "$RUN/checkpoint_last.pt" ]] && resume=(--resume)
   [[ -n "${INIT_FROM:-}" ]] && resume+=(--init-from "$INIT_FROM")  # ignored by train when resuming

@@ -56,6 +56,40 @@ TEST(HorizontalGrid, VisitsEveryPointWithinACellSizeIgnoresHeightAndStopsWhenAsk
   EXPECT_THROW(HorizontalGrid(Eigen::Vector3d::UnitY(), 0.0), Error);
 }
 
+// The street path's nearest-sample searches keep the first of equally near samples, so the worlds depend on the
+// visiting order: the 3x3 cells along the first horizontal axis (down.unitOrthogonal()) in the outer loop, the
+// second (down x first) in the inner one, each cell's points in insertion order.
+TEST(HorizontalGrid, VisitsCellsInAFixedOrderAndPointsInInsertionOrder) {
+  const Eigen::Vector3d down = Eigen::Vector3d(0.1, 1.0, -0.2).normalized();
+  const Eigen::Vector3d axis_a = down.unitOrthogonal(), axis_b = down.cross(axis_a);
+  const double cell = 2.0;
+  HorizontalGrid grid(down, cell);
+  const Eigen::Vector3d q = 0.7 * axis_a - 3.1 * axis_b + 5.0 * down;
+  struct Inserted {
+    int a, b, index;
+  };
+  std::vector<Inserted> inserted;
+  int index = 0;
+  for (int round = 0; round < 2; ++round)  // two points per cell, the cells in a scrambled order
+    for (int k = 0; k < 9; ++k) {
+      const int da = (k * 4) % 9 / 3 - 1, db = (k * 4) % 3 - 1;
+      const Eigen::Vector3d p = q + cell * (da * axis_a + db * axis_b) + 0.1 * round * axis_b - 2.0 * round * down;
+      grid.Insert(p, index);
+      inserted.push_back({static_cast<int>(std::floor(p.dot(axis_a) / cell)),
+                          static_cast<int>(std::floor(p.dot(axis_b) / cell)), index});
+      ++index;
+    }
+  std::stable_sort(inserted.begin(), inserted.end(),
+                   [](const Inserted& x, const Inserted& y) { return std::make_pair(x.a, x.b) < std::make_pair(y.a, y.b); });
+  std::vector<int> expected, visited;
+  for (const Inserted& i : inserted) expected.push_back(i.index);
+  grid.AnyNear(q, [&](int i) {
+    visited.push_back(i);
+    return false;
+  });
+  EXPECT_EQ(visited, expected);
+}
+
 TEST(SimulatorTexture, BilinearAndMipLevelsByHand) {
   // 4x4 texture: value = x (column index) / 4.
   std::vector<float> texels(16);

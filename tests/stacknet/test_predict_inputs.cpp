@@ -93,7 +93,8 @@ TEST(PredictInputs, OdometryRefusesMapsOfAnotherCameraPair) {
   ASSERT_FALSE(drive.empty());
   const std::string model = dir / "tiny.pt";
   ASSERT_EQ(testing::RunDvso("export --config " + std::string(DVSO_TEST_DATA_DIR) +
-                             "/../configs/stacknet_tiny.yaml --random-init --model simple --out " + model)
+                             "/../configs/stacknet_tiny.yaml --random-init --model simple --training-baseline 0.54 "
+                             "--training-fx-over-width 0.58 --out " + model)
                 .exit_code,
             0);
   const testing::CliRun predicted =
@@ -148,6 +149,22 @@ TEST(PredictInputs, OdometryOnPredictedMapsTakesThePredictingModelsVirtualBaseli
   const std::string from_camera = header_of("", "c");
   EXPECT_EQ(from_camera.find("virtual baseline 0.3125 m"), std::string::npos) << from_camera;
   EXPECT_NE(from_camera.find("virtual baseline 0.537"), std::string::npos) << from_camera;
+  // Maps of a model without a training camera: refused as `--model` refuses it, naming the record.
+  const std::string no_camera = dir / "no_camera.pt";
+  ASSERT_EQ(testing::RunDvso("export --config " + std::string(DVSO_TEST_DATA_DIR) +
+                             "/../configs/stacknet_tiny.yaml --random-init --model simple --out " + no_camera)
+                .exit_code,
+            0);
+  ASSERT_EQ(testing::RunDvso("predict --model " + no_camera + " --sequence " + (dir / "seq") + " --no-color --out " +
+                             (dir / "maps"))
+                .exit_code,
+            0);
+  const testing::CliRun refused = testing::RunDvso("odometry --mode dvso --no-progress --sequence " + (dir / "seq") +
+                                                   files + " --out " + (dir / "d"));
+  EXPECT_EQ(refused.exit_code, 1) << refused.out;
+  EXPECT_NE(refused.out.find("prediction_info.json: the model that predicted the maps carries no training camera"),
+            std::string::npos)
+      << refused.out;
 }
 
 }  // namespace
