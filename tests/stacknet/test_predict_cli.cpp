@@ -25,7 +25,8 @@ class PredictCli : public ::testing::Test {
     fs::create_directories(dir_ / "images");
     model_ = (dir_ / "tiny.pt").string();
     const std::string export_cmd = std::string(DVSO_BINARY) + " export --config " + DVSO_TEST_DATA_DIR +
-                                   "/../configs/stacknet_tiny.yaml --random-init --model simple --out " + model_ +
+                                   "/../configs/stacknet_tiny.yaml --random-init --model simple --training-baseline 0.54 "
+                                   "--training-fx-over-width 0.58 --out " + model_ +
                                    " > /dev/null 2>&1";
     ASSERT_EQ(std::system(export_cmd.c_str()), 0);
   }
